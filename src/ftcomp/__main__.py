@@ -1,0 +1,7 @@
+"""``python -m ftcomp``."""
+
+import sys
+
+from ftcomp.cli import main
+
+sys.exit(main())

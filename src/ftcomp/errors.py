@@ -1,0 +1,51 @@
+"""The one error hierarchy of ftcomp.
+
+Every error a user can cause derives from :class:`FtcompError`; the CLI turns it into one line
+``error: ...`` and exit code 2. Messages name the bad value, where it came from (file, row,
+column, parameter) and what would be valid.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "CalibrationFileError",
+    "FtcompError",
+    "IdentificationError",
+    "InputFileError",
+    "OrientationError",
+    "ParameterError",
+    "SimulationError",
+    "UnreachablePoseError",
+]
+
+
+class FtcompError(Exception):
+    """Base class of every error ftcomp raises on bad input or an impossible request."""
+
+
+class ParameterError(FtcompError, ValueError):
+    """A function or command-line parameter is out of its valid range or has the wrong shape."""
+
+
+class InputFileError(FtcompError):
+    """A sample file (CSV) cannot be used: missing columns, bad cells, wrong delimiter..."""
+
+
+class CalibrationFileError(FtcompError):
+    """A calibration file is unreadable, of an unknown format, incomplete or not finite."""
+
+
+class OrientationError(FtcompError, ValueError):
+    """An orientation cannot be interpreted (zero-norm quaternion, ambiguous encoding...)."""
+
+
+class IdentificationError(FtcompError):
+    """The calibration parameters cannot be identified from the given poses."""
+
+
+class SimulationError(FtcompError):
+    """The simulated cell cannot do what was asked."""
+
+
+class UnreachablePoseError(SimulationError):
+    """Inverse kinematics found no joint configuration for a requested pose."""

@@ -1,0 +1,151 @@
+"""Frames, orientation encodings and the gravity model's geometry.
+
+Conventions (the single source is ``docs/conventions.md``):
+
+- ``R_a_b`` maps vectors expressed in frame ``b`` into frame ``a``.
+- The world frame has z up (against gravity). The robot base is tilted from the world by
+  ``R_world_base = Rx(U) @ Ry(V)`` (paper Eq. 1).
+- The sensor frame's orientation in the base frame, ``R_base_sensor``, comes from one of three
+  encodings: a quaternion ``qx,qy,qz,qw``, a rotation vector ``rx,ry,rz`` [rad] (as UR
+  controllers report poses) or the paper's angles ``alpha_deg,beta_deg,gamma_deg`` with
+  ``R = Rz(alpha) @ Ry(beta) @ Rx(gamma)`` (intrinsic Z-Y'-X'', paper Eq. 2).
+- Gravity acting on the tool, in the sensor frame:
+  ``R_base_sensor.T @ R_world_base.T @ [0, 0, -G]`` (paper Eq. 3 with the transpose the data
+  demands).
+
+Every orientation conversion goes through :class:`scipy.spatial.transform.Rotation`.
+"""
+
+from __future__ import annotations
+
+from typing import Final, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from ftcomp.errors import OrientationError, ParameterError
+
+__all__ = [
+    "ENCODING_COLUMNS",
+    "OrientationEncoding",
+    "R_world_base_from_tilt",
+    "encode_orientation",
+    "gravity_in_base",
+    "gravity_in_sensor",
+    "rotation_from_encoding",
+    "tilt_from_gravity_in_base",
+]
+
+OrientationEncoding = Literal["quaternion", "rotvec", "paper_euler"]
+
+#: Column names of each orientation encoding, in the order the values are given.
+ENCODING_COLUMNS: Final[dict[OrientationEncoding, tuple[str, ...]]] = {
+    "quaternion": ("qx", "qy", "qz", "qw"),
+    "rotvec": ("rx", "ry", "rz"),
+    "paper_euler": ("alpha_deg", "beta_deg", "gamma_deg"),
+}
+
+#: scipy's sequence for the paper's angles: upper case is intrinsic, Rz(a) @ Ry(b) @ Rx(c).
+_PAPER_EULER_SEQ: Final = "ZYX"
+#: scipy's sequence for the base tilt, intrinsic: Rx(U) @ Ry(V).
+_TILT_SEQ: Final = "XY"
+
+
+def rotation_from_encoding(encoding: OrientationEncoding, values: ArrayLike) -> Rotation:
+    """Build ``R_base_sensor`` from one orientation encoding.
+
+    Args:
+        encoding: which encoding ``values`` holds (see :data:`ENCODING_COLUMNS`).
+        values: shape (k,) or (N, k), columns in the order of ``ENCODING_COLUMNS[encoding]``;
+            quaternions scalar-last ``(qx, qy, qz, qw)``, rotation vectors in rad, paper angles
+            in degrees.
+
+    Returns:
+        The rotation(s) ``R_base_sensor``.
+
+    Raises:
+        OrientationError: a zero-norm or non-finite quaternion, or values of the wrong width.
+    """
+    if encoding not in ENCODING_COLUMNS:
+        raise ParameterError(
+            f"unknown orientation encoding {encoding!r}; valid: {', '.join(ENCODING_COLUMNS)}"
+        )
+    arr = np.asarray(values, dtype=float)
+    width = len(ENCODING_COLUMNS[encoding])
+    if arr.shape[-1:] != (width,) or arr.ndim > 2:
+        raise OrientationError(
+            f"{encoding} orientation needs shape ({width},) or (N, {width}), got {arr.shape}"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise OrientationError(f"{encoding} orientation contains NaN or infinity")
+    if encoding == "quaternion":
+        norms = np.linalg.norm(np.atleast_2d(arr), axis=1)
+        if np.any(norms < 1e-12):
+            raise OrientationError("zero-norm quaternion (qx, qy, qz, qw) has no orientation")
+        return Rotation.from_quat(arr)
+    if encoding == "rotvec":
+        return Rotation.from_rotvec(arr)
+    return Rotation.from_euler(_PAPER_EULER_SEQ, arr, degrees=True)
+
+
+def encode_orientation(rotation: Rotation, encoding: OrientationEncoding) -> NDArray[np.float64]:
+    """The inverse of :func:`rotation_from_encoding`: values in ``ENCODING_COLUMNS`` order.
+
+    Quaternions come out scalar-last with ``qw >= 0``; paper angles in degrees.
+    """
+    if encoding == "quaternion":
+        return np.asarray(rotation.as_quat(canonical=True), dtype=float)
+    if encoding == "rotvec":
+        return np.asarray(rotation.as_rotvec(), dtype=float)
+    if encoding == "paper_euler":
+        return np.asarray(rotation.as_euler(_PAPER_EULER_SEQ, degrees=True), dtype=float)
+    raise ParameterError(
+        f"unknown orientation encoding {encoding!r}; valid: {', '.join(ENCODING_COLUMNS)}"
+    )
+
+
+def R_world_base_from_tilt(U_rad: float, V_rad: float) -> NDArray[np.float64]:
+    """The base's mounting tilt ``R_world_base = Rx(U) @ Ry(V)`` (paper Eq. 1), shape (3, 3)."""
+    return np.asarray(Rotation.from_euler(_TILT_SEQ, [U_rad, V_rad]).as_matrix(), dtype=float)
+
+
+def gravity_in_base(weight_N: float, U_rad: float, V_rad: float) -> NDArray[np.float64]:
+    """Gravity on a body of weight ``weight_N`` [N], in the tilted base frame [N], shape (3,).
+
+    Equals ``R_world_base.T @ [0, 0, -G] = [G cosU sinV, -G sinU, -G cosU cosV]`` (paper Eq. 3, 5).
+    """
+    return R_world_base_from_tilt(U_rad, V_rad).T @ np.array([0.0, 0.0, -weight_N])
+
+
+def tilt_from_gravity_in_base(gravity_base: ArrayLike) -> tuple[float, float, float]:
+    """Invert :func:`gravity_in_base`: ``(G [N], U [rad], V [rad])`` (paper Eq. 10-11).
+
+    Uses ``V = atan2(a_x, -a_z)``, which equals the paper's ``arctan(-a_x / a_z)`` whenever the
+    base is tilted by less than 90 degrees, and stays right beyond.
+    """
+    a = np.asarray(gravity_base, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ParameterError(f"gravity_base must be 3 finite numbers, got {a!r}")
+    weight = float(np.linalg.norm(a))
+    if weight == 0.0:
+        raise ParameterError("gravity_base is the zero vector: no weight, no tilt")
+    U = float(np.arcsin(np.clip(-a[1] / weight, -1.0, 1.0)))
+    V = float(np.arctan2(a[0], -a[2]))
+    return weight, U, V
+
+
+def gravity_in_sensor(gravity_base: ArrayLike, R_base_sensor: ArrayLike) -> NDArray[np.float64]:
+    """Express a base-frame gravity vector in the sensor frame: ``R_base_sensor.T @ g``.
+
+    Args:
+        gravity_base: shape (3,), [N] in the base frame.
+        R_base_sensor: shape (3, 3) or (N, 3, 3).
+
+    Returns:
+        Shape (3,) or (N, 3), [N] in the sensor frame.
+    """
+    g = np.asarray(gravity_base, dtype=float)
+    R = np.asarray(R_base_sensor, dtype=float)
+    # g @ R == R.T @ g, and broadcasts over a stack of rotations.
+    return np.asarray(g @ R, dtype=float)
