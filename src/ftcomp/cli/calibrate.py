@@ -1,11 +1,136 @@
-"""Placeholder: the `calibrate` command is registered here once it exists."""
+"""``ftcomp calibrate SAMPLES.csv -o calibration.json [--method paper|joint] [--json]``."""
 
 from __future__ import annotations
 
 import argparse
+import json
+import math
+import sys
 
-__all__ = ["register"]
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from ftcomp.calibration import Calibration, calibrate
+from ftcomp.cli.common import parse_range, print_warnings
+from ftcomp.io.atomic import check_writable
+from ftcomp.io.calibration_file import calibration_to_dict, save_calibration
+from ftcomp.io.samples import WRENCH_COLUMNS, read_samples
+
+__all__ = ["console", "register", "render_calibration"]
 
 
 def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Add nothing yet."""
+    """Add the ``calibrate`` command."""
+    parser = commands.add_parser(
+        "calibrate",
+        help="identify sensor bias, tool weight and centre of gravity, and base tilt",
+        description="Identify F/T sensor bias, tool weight and centre of gravity, and the "
+        "robot base's tilt from readings at several poses (sample CSV).",
+    )
+    parser.add_argument("samples", metavar="SAMPLES.csv", help="sample CSV (see docs/files.md)")
+    parser.add_argument("-o", "--output", required=True, metavar="CALIBRATION.json")
+    parser.add_argument(
+        "--method",
+        choices=("paper", "joint"),
+        default="joint",
+        help="paper: the paper's two-stage linear fit; joint: weighted joint nonlinear fit "
+        "(default)",
+    )
+    parser.add_argument(
+        "--range",
+        metavar="FORCE_N,TORQUE_NM",
+        type=parse_range,
+        help="sensor range, e.g. 250,6: a reading beyond it is an error",
+    )
+    parser.add_argument("--json", action="store_true", help="print the results as JSON")
+    parser.add_argument("--force", action="store_true", help="replace an existing output file")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Read, identify, write, print."""
+    output = check_writable(args.output, overwrite=args.force)
+    force_range, torque_range = args.range if args.range else (None, None)
+    samples = read_samples(args.samples, force_range_N=force_range, torque_range_Nm=torque_range)
+    result = calibrate(samples, method=args.method)
+    save_calibration(output, result)
+    if args.json:
+        print(json.dumps(calibration_to_dict(result), indent=2, allow_nan=False))
+    else:
+        out = console()
+        render_calibration(result, out)
+        out.print(f"calibration written to [bold]{output}[/bold]")
+    print_warnings(result.warnings)
+    return 0
+
+
+def _pm(value: float, se: float, scale: float = 1.0, digits: int = 4) -> str:
+    se_text = f"{se * scale:.{digits}f}" if math.isfinite(se) else "?"
+    return f"{value * scale:+.{digits}f} ± {se_text}"
+
+
+def _residual_cell(residual: float, relative_percent: float) -> str:
+    if math.isfinite(relative_percent):
+        return f"{residual:+.4f} ({relative_percent:.2f})"
+    return f"{residual:+.4f}"
+
+
+def console() -> Console:
+    """A console 120 columns wide when the output is not a terminal (files, pipes, CI logs)."""
+    return Console() if sys.stdout.isatty() else Console(width=120)
+
+
+def render_calibration(result: Calibration, console: Console) -> None:
+    """Print the parameters ± standard error, per-pose residuals, Table 3 and warnings."""
+    m, se = result.model, result.std_errors
+    params = Table(title=f"Calibration ({result.method} method, {len(result.pose_ids)} poses)")
+    for col in ("parameter", "x", "y", "z", "unit"):
+        params.add_column(col, justify="left" if col in ("parameter", "unit") else "right")
+    params.add_row("tool weight G", _pm(m.weight_N, se.weight_N), "", "", "N")
+    params.add_row(
+        "base tilt U, V",
+        _pm(m.tilt_U_rad, se.tilt_U_rad, math.degrees(1)),
+        _pm(m.tilt_V_rad, se.tilt_V_rad, math.degrees(1)),
+        "",
+        "deg",
+    )
+    for label, vec, err, unit in (
+        ("force bias F0", m.force_bias_N, se.force_bias_N, "N"),
+        ("torque bias M0", m.torque_bias_Nm, se.torque_bias_Nm, "N·m"),
+    ):
+        params.add_row(label, *(_pm(v, e) for v, e in zip(vec, err, strict=True)), unit)
+    cog, cog_se = m.center_of_gravity_m, se.center_of_gravity_m
+    params.add_row(
+        "centre of gravity P",
+        *(_pm(v, e, 1000.0, 2) for v, e in zip(cog, cog_se, strict=True)),
+        "mm",
+    )
+    console.print(params)
+
+    poses = Table(title="Per-pose residuals (measured − model) and Table-3 relative errors [%]")
+    poses.add_column("pose")
+    for col in WRENCH_COLUMNS:
+        poses.add_column(col, justify="right")
+    for pid, res, rel in zip(
+        result.pose_ids, result.residuals, result.relative_error_percent, strict=True
+    ):
+        poses.add_row(
+            pid,
+            *(_residual_cell(r, p) for r, p in zip(res, rel, strict=True)),
+        )
+    poses.add_row(
+        "mean δ",
+        *(f"{v:.2f}" for v in result.relative_error_mean_percent),
+        style="bold",
+    )
+    console.print(poses)
+    force_rms, torque_rms = result.residual_rms
+    loo_force, loo_torque = result.loo_rms
+    console.print(
+        f"residual RMS: force {force_rms:.4f} N, torque {torque_rms:.5f} N·m; "
+        f"leave-one-pose-out RMS: force {loo_force:.4f} N, torque {loo_torque:.5f} N·m; "
+        f"regressor condition number {result.condition_number:.2f}"
+    )
+    if np.isnan(loo_force):
+        console.print("(leave-one-pose-out needs at least 4 poses)")

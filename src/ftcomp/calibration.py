@@ -1,0 +1,310 @@
+"""Identification of sensor bias, tool weight and centre of gravity, and base tilt.
+
+:func:`calibrate` averages the readings of each pose (the paper averages 500 per pose), checks
+the poses can separate bias from gravity, fits with the chosen method
+(:mod:`ftcomp.estimators`) and reports what a user needs to trust the result: the standard
+error of every parameter, the regressor's condition number, per-pose residuals, the paper's
+Table-3 relative errors and the leave-one-pose-out prediction error.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ftcomp.errors import IdentificationError, ParameterError
+from ftcomp.estimators import Fit, Method, fit_joint, fit_paper, force_regressor, predict_wrench
+from ftcomp.frames import tilt_from_gravity_in_base
+from ftcomp.io.samples import Samples
+from ftcomp.model import GravityModel
+
+__all__ = ["CONDITION_WARNING", "Calibration", "StandardErrors", "calibrate", "pose_means"]
+
+#: Condition number of the force regressor above which the poses are reported as too alike.
+CONDITION_WARNING = 30.0
+#: ... and above which bias and gravity are not separable at all.
+_CONDITION_SINGULAR = 1e7
+_DISTINCT_POSE_TOLERANCE = 1e-6  # Frobenius norm between rotation matrices
+
+
+def _frozen(value: object, shape: tuple[int, ...] | None = None) -> NDArray[np.float64]:
+    arr = np.array(value, dtype=float)
+    if shape is not None and arr.shape != shape:
+        raise ParameterError(f"expected shape {shape}, got {arr.shape}")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class StandardErrors:
+    """One standard error per identified quantity, in the quantity's own unit and frame."""
+
+    weight_N: float
+    center_of_gravity_m: NDArray[np.float64]
+    force_bias_N: NDArray[np.float64]
+    torque_bias_Nm: NDArray[np.float64]
+    tilt_U_rad: float
+    tilt_V_rad: float
+    gravity_base_N: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for name in ("center_of_gravity_m", "force_bias_N", "torque_bias_Nm", "gravity_base_N"):
+            object.__setattr__(self, name, _frozen(getattr(self, name), (3,)))
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The result of an identification: the model plus the evidence for it.
+
+    Attributes:
+        model: the identified :class:`~ftcomp.model.GravityModel`.
+        method: ``"paper"`` or ``"joint"``.
+        std_errors: standard error of every parameter.
+        pose_ids: the id of each pose, in the order of the per-pose arrays.
+        R_base_sensor: orientation of each pose, shape (P, 3, 3).
+        wrench_mean: mean reading at each pose [N, N*m], shape (P, 6).
+        readings_per_pose: how many readings were averaged at each pose, shape (P,).
+        residuals: ``wrench_mean - model.predict(R)`` per pose, shape (P, 6).
+        relative_error_percent: the paper's Table 3, ``100 |residual| / |wrench_mean|``, (P, 6).
+        loo_error: leave-one-pose-out prediction error per pose (NaN where the other poses
+            could not identify the model), shape (P, 6).
+        condition_number: of the force regressor (Eq. 7); large means poses too alike.
+        warnings: human-readable warnings.
+    """
+
+    model: GravityModel
+    method: Method
+    std_errors: StandardErrors
+    pose_ids: tuple[str, ...]
+    R_base_sensor: NDArray[np.float64] = field(repr=False)
+    wrench_mean: NDArray[np.float64] = field(repr=False)
+    readings_per_pose: NDArray[np.float64] = field(repr=False)
+    residuals: NDArray[np.float64] = field(repr=False)
+    relative_error_percent: NDArray[np.float64] = field(repr=False)
+    loo_error: NDArray[np.float64] = field(repr=False)
+    condition_number: float = math.inf
+    warnings: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        n = len(self.pose_ids)
+        for name, shape in (
+            ("R_base_sensor", (n, 3, 3)),
+            ("wrench_mean", (n, 6)),
+            ("readings_per_pose", (n,)),
+            ("residuals", (n, 6)),
+            ("relative_error_percent", (n, 6)),
+            ("loo_error", (n, 6)),
+        ):
+            object.__setattr__(self, name, _frozen(getattr(self, name), shape))
+
+    @property
+    def residual_rms(self) -> tuple[float, float]:
+        """RMS of the force [N] and torque [N*m] residuals over poses and axes."""
+        r = self.residuals
+        return float(np.sqrt(np.mean(r[:, :3] ** 2))), float(np.sqrt(np.mean(r[:, 3:] ** 2)))
+
+    @property
+    def relative_error_mean_percent(self) -> NDArray[np.float64]:
+        """Mean of the Table-3 relative errors per axis, shape (6,) (the paper's delta row)."""
+        with np.errstate(invalid="ignore"):
+            return np.asarray(np.nanmean(self.relative_error_percent, axis=0), dtype=float)
+
+    @property
+    def loo_rms(self) -> tuple[float, float]:
+        """RMS leave-one-pose-out prediction error: force [N], torque [N*m]."""
+        e = self.loo_error
+        with np.errstate(invalid="ignore"):
+            return (
+                float(np.sqrt(np.nanmean(e[:, :3] ** 2))),
+                float(np.sqrt(np.nanmean(e[:, 3:] ** 2))),
+            )
+
+
+def pose_means(
+    samples: Samples,
+) -> tuple[tuple[str, ...], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray]:
+    """Group readings by pose and average them.
+
+    Rows with the same ``pose`` id form a pose; without a ``pose`` column, rows with the same
+    orientation do. Returns ``(ids, R (P,3,3), wrench mean (P,6), counts (P,), variance of the
+    mean (P,6))``, the variance NaN at poses with a single reading.
+    """
+    if samples.pose is not None:
+        keys = list(samples.pose)
+    else:
+        rounded = np.round(samples.R_base_sensor.reshape(len(samples), 9), 9)
+        keys = [str(tuple(row)) for row in rounded]
+    order: dict[str, list[int]] = {}
+    for i, key in enumerate(keys):
+        order.setdefault(key, []).append(i)
+    ids: list[str] = []
+    R, mean, count, var = [], [], [], []
+    for n_pose, (key, rows) in enumerate(order.items(), start=1):
+        Rs = samples.R_base_sensor[rows]
+        spread = float(np.max(np.linalg.norm(Rs - Rs[0], axis=(1, 2))))
+        if spread > 1e-3:
+            raise IdentificationError(
+                f"{samples.source}: pose {key!r} has readings at orientations that differ by "
+                f"{spread:.3g} (Frobenius norm): one pose id must be one orientation"
+            )
+        w = samples.wrench_sensor[rows]
+        ids.append(key if samples.pose is not None else str(n_pose))
+        R.append(Rs[0])
+        mean.append(w.mean(axis=0))
+        count.append(len(rows))
+        var.append(w.var(axis=0, ddof=1) / len(rows) if len(rows) > 1 else np.full(6, np.nan))
+    return tuple(ids), np.array(R), np.array(mean), np.array(count, dtype=float), np.array(var)
+
+
+def _check_identifiable(R: NDArray[np.float64], source: str) -> float:
+    n = len(R)
+    distinct = 0
+    for i in range(n):
+        if all(np.linalg.norm(R[i] - R[j]) > _DISTINCT_POSE_TOLERANCE for j in range(i)):
+            distinct += 1
+    if distinct < 3:
+        raise IdentificationError(
+            f"{source}: {distinct} distinct pose(s); at least 3 are needed to separate sensor "
+            "bias from tool gravity"
+        )
+    cond = float(np.linalg.cond(force_regressor(R)))
+    if not math.isfinite(cond) or cond > _CONDITION_SINGULAR:
+        raise IdentificationError(
+            f"{source}: the poses differ only by rotation about one axis (e.g. about the gravity "
+            f"direction; regressor condition number {cond:.3g}): bias and gravity cannot be "
+            "separated; add poses that tilt the tool differently"
+        )
+    return cond
+
+
+def _sigma(
+    wrench: NDArray[np.float64],
+    R: NDArray[np.float64],
+    var_mean: NDArray[np.float64],
+    count: NDArray[np.float64],
+    paper: Fit,
+) -> NDArray[np.float64]:
+    """Standard deviation of each pose's mean reading, shape (P, 6): the joint fit's weights.
+
+    From the pooled scatter of repeated readings per channel where there are any (scaled by
+    1/sqrt(n) per pose), else from the paper fit's force and torque residuals.
+    """
+    repeated = count > 1
+    if np.any(repeated):
+        # Pooled within-pose variance of one reading, per channel.
+        single_var = np.sum(
+            var_mean[repeated] * count[repeated, None] * (count[repeated, None] - 1), axis=0
+        )
+        single_var /= np.sum(count[repeated] - 1)
+        if np.all(single_var > 0.0):
+            return np.sqrt(single_var[None, :] / count[:, None])
+    r = predict_wrench(paper.theta, R) - wrench
+    group = np.array([np.sqrt(np.mean(r[:, :3] ** 2)), np.sqrt(np.mean(r[:, 3:] ** 2))])
+    group = np.maximum(group, 1e-12 * np.maximum(np.abs(wrench).max(), 1.0))
+    return np.broadcast_to(np.repeat(group, 3), wrench.shape).copy()
+
+
+def _fit(
+    method: Method,
+    wrench: NDArray[np.float64],
+    R: NDArray[np.float64],
+    var_mean: NDArray[np.float64],
+    count: NDArray[np.float64],
+) -> Fit:
+    paper = fit_paper(wrench, R)
+    if method == "paper":
+        return paper
+    return fit_joint(wrench, R, _sigma(wrench, R, var_mean, count, paper), paper.theta)
+
+
+def _propagate(
+    func: Callable[[NDArray[np.float64]], NDArray[np.float64]],
+    x: NDArray[np.float64],
+    cov: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Standard errors of ``func(x)`` by first-order propagation (central differences)."""
+    y0 = func(x)
+    J = np.zeros((len(y0), len(x)))
+    for k in range(len(x)):
+        h = 1e-7 * max(1.0, abs(x[k]))
+        dx = np.zeros_like(x)
+        dx[k] = h
+        J[:, k] = (func(x + dx) - func(x - dx)) / (2 * h)
+    return np.sqrt(np.maximum(np.diag(J @ cov @ J.T), 0.0))
+
+
+def _model(theta: NDArray[np.float64]) -> GravityModel:
+    return GravityModel.from_gravity_in_base(theta[0:3], theta[9:12], theta[3:6], theta[6:9])
+
+
+def calibrate(samples: Samples, *, method: Method = "joint") -> Calibration:
+    """Identify the sensor bias, tool weight and centre of gravity and the base tilt.
+
+    Args:
+        samples: readings at three or more distinct poses (see :func:`ftcomp.io.read_samples`).
+        method: ``"paper"`` for the paper's two-stage linear least squares (Eq. 7-11, 16-19),
+            ``"joint"`` for the weighted joint nonlinear fit (the default).
+
+    Raises:
+        IdentificationError: fewer than 3 distinct poses, or poses that cannot separate bias
+            from gravity.
+    """
+    if method not in ("paper", "joint"):
+        raise ParameterError(f"method must be 'paper' or 'joint', got {method!r}")
+    ids, R, wrench, count, var_mean = pose_means(samples)
+    cond = _check_identifiable(R, samples.source)
+    fit = _fit(method, wrench, R, var_mean, count)
+    model = _model(fit.theta)
+    gvu = _propagate(
+        lambda th: np.array(tilt_from_gravity_in_base(th[0:3])), fit.theta, fit.covariance
+    )
+    se = np.sqrt(np.maximum(np.diag(fit.covariance), 0.0))
+    std_errors = StandardErrors(
+        weight_N=float(gvu[0]),
+        center_of_gravity_m=se[9:12],
+        force_bias_N=se[3:6],
+        torque_bias_Nm=se[6:9],
+        tilt_U_rad=float(gvu[1]),
+        tilt_V_rad=float(gvu[2]),
+        gravity_base_N=se[0:3],
+    )
+    residuals = wrench - model.predict(R)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        relative = 100.0 * np.abs(residuals) / np.abs(wrench)
+    relative[~np.isfinite(relative)] = np.nan
+
+    loo = np.full_like(wrench, np.nan)
+    if len(ids) > 3:
+        for k in range(len(ids)):
+            keep = np.arange(len(ids)) != k
+            try:
+                _check_identifiable(R[keep], samples.source)
+            except IdentificationError:
+                continue
+            sub = _fit(method, wrench[keep], R[keep], var_mean[keep], count[keep])
+            loo[k] = wrench[k] - predict_wrench(sub.theta, R[k : k + 1])[0]
+
+    warnings = list(samples.warnings)
+    if cond > CONDITION_WARNING:
+        warnings.append(
+            f"the poses are too alike to separate bias from gravity well (regressor condition "
+            f"number {cond:.1f} > {CONDITION_WARNING:g}): tilt the tool further between poses"
+        )
+    return Calibration(
+        model=model,
+        method=method,
+        std_errors=std_errors,
+        pose_ids=ids,
+        R_base_sensor=R,
+        wrench_mean=wrench,
+        readings_per_pose=count,
+        residuals=residuals,
+        relative_error_percent=relative,
+        loo_error=loo,
+        condition_number=cond,
+        warnings=tuple(warnings),
+    )

@@ -1,0 +1,30 @@
+"""Small pieces the commands share: argument types and warning output."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Iterable
+
+__all__ = ["parse_range", "print_warnings"]
+
+
+def parse_range(text: str) -> tuple[float, float]:
+    """``"250,6"`` -> ``(250.0, 6.0)``: a sensor's force [N] and torque [N*m] range."""
+    parts = text.split(",")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 2 or not all(math.isfinite(v) and v > 0 for v in values):
+        raise argparse.ArgumentTypeError(
+            f"expected FORCE_N,TORQUE_NM with two positive numbers, e.g. 250,6; got {text!r}"
+        )
+    return values[0], values[1]
+
+
+def print_warnings(warnings: Iterable[str]) -> None:
+    """One ``warning: ...`` line per warning, on stderr."""
+    for warning in warnings:
+        print(f"warning: {warning}", file=sys.stderr)

@@ -1,0 +1,121 @@
+"""Run-time gravity compensation (paper Eq. 20-23) and weighing of a grasped load.
+
+``GravityCompensator(calibration).compensate(wrench_sensor, R_base_sensor)`` removes the sensor
+bias and the tool's gravity wrench from a reading, leaving the wrench of everything else: contact
+forces and a grasped load. It is written for the control loop: the constant parts are computed
+once, and one sample costs two small matrix products.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ftcomp.calibration import Calibration
+from ftcomp.constants import STANDARD_GRAVITY_MPS2
+from ftcomp.errors import ParameterError
+from ftcomp.model import GravityModel, skew
+
+__all__ = ["GravityCompensator", "LoadEstimate"]
+
+
+@dataclass(frozen=True)
+class LoadEstimate:
+    """A grasped load weighed from compensated readings.
+
+    Attributes:
+        weight_N: the load's weight [N].
+        mass_kg: its mass at standard gravity [kg].
+        center_of_gravity_m: its centre of gravity in the sensor frame [m], shape (3,); with
+            readings at a single orientation only the part across gravity is observable, and
+            the component along gravity is reported as 0 (``cog_fully_observed`` is False).
+        cog_fully_observed: whether the readings span two or more gravity directions.
+    """
+
+    weight_N: float
+    mass_kg: float
+    center_of_gravity_m: NDArray[np.float64]
+    cog_fully_observed: bool
+
+
+class GravityCompensator:
+    """Removes bias and tool gravity from F/T readings.
+
+    Args:
+        calibration: a :class:`~ftcomp.calibration.Calibration` (e.g. from
+            :func:`ftcomp.load_calibration`) or a bare :class:`~ftcomp.model.GravityModel`.
+    """
+
+    def __init__(self, calibration: Calibration | GravityModel) -> None:
+        model = calibration.model if isinstance(calibration, Calibration) else calibration
+        self.model = model
+        self._gravity_base = model.gravity_base_N.copy()
+        self._bias = np.concatenate([model.force_bias_N, model.torque_bias_Nm])
+        # [F; M] of the tool gravity = A @ g_s with A = [I; skew(P)] (Eq. 12, 20).
+        self._A = np.vstack([np.eye(3), skew(model.center_of_gravity_m)])
+        self._A_T = np.ascontiguousarray(self._A.T)
+        unit = self._gravity_base / np.linalg.norm(self._gravity_base) if model.weight_N else None
+        self._gravity_dir_base = unit
+
+    def compensate(self, wrench_sensor: ArrayLike, R_base_sensor: ArrayLike) -> NDArray[np.float64]:
+        """Contact wrench ``[F'; M']`` (Eq. 22) [N, N*m], sensor frame.
+
+        Args:
+            wrench_sensor: raw reading(s), shape (6,) or (N, 6), sensor frame.
+            R_base_sensor: the sensor's orientation(s) in the base frame, (3, 3) or (N, 3, 3).
+
+        Returns:
+            Shape (6,) or (N, 6).
+        """
+        w = np.asarray(wrench_sensor, dtype=float)
+        R = np.asarray(R_base_sensor, dtype=float)
+        if w.shape == (6,) and R.shape == (3, 3):
+            return w - self._bias - self._A @ (self._gravity_base @ R)
+        if w.ndim == 2 and w.shape[1] == 6 and R.shape == (len(w), 3, 3):
+            g_s = self._gravity_base @ R  # (N, 3): R_i.T @ g for every i
+            out = g_s @ self._A_T
+            np.subtract(w, out, out=out)
+            out -= self._bias
+            return out
+        raise ParameterError(
+            "compensate needs wrench_sensor (6,) with R_base_sensor (3, 3), or (N, 6) with "
+            f"(N, 3, 3); got {w.shape} and {R.shape}"
+        )
+
+    def load_weight_N(self, wrench_sensor: ArrayLike, R_base_sensor: ArrayLike) -> NDArray:
+        """Weight of a grasped load, ``|F'|`` (Eq. 23) [N]: a float array of shape () or (N,)."""
+        contact = self.compensate(wrench_sensor, R_base_sensor)
+        return np.asarray(np.linalg.norm(contact[..., :3], axis=-1))
+
+    def estimate_load(self, wrench_sensor: ArrayLike, R_base_sensor: ArrayLike) -> LoadEstimate:
+        """Weigh a grasped load and locate its centre of gravity (beyond the paper).
+
+        With the load's gravity along the calibrated gravity direction ``u`` (base frame), the
+        compensated force at pose ``i`` is ``w R_i.T u`` and the torque ``c x F'_i``; ``w`` and
+        ``c`` follow by least squares over all readings.
+
+        Args:
+            wrench_sensor: raw readings holding the load and touching nothing, (N, 6) or (6,).
+            R_base_sensor: their orientations, (N, 3, 3) or (3, 3).
+        """
+        w = np.asarray(wrench_sensor, dtype=float).reshape(-1, 6)
+        R = np.asarray(R_base_sensor, dtype=float).reshape(-1, 3, 3)
+        contact = self.compensate(w, R)
+        force, torque = contact[:, :3], contact[:, 3:]
+        if self._gravity_dir_base is None:
+            weight = float(np.mean(np.linalg.norm(force, axis=1)))
+            directions = force / np.maximum(np.linalg.norm(force, axis=1, keepdims=True), 1e-12)
+        else:
+            directions = self._gravity_dir_base @ R  # unit gravity direction in sensor frame
+            weight = float(np.mean(np.sum(directions * force, axis=1)))
+        X = -np.concatenate([skew(f) for f in force])  # c x f = -skew(f) c
+        cog, *_, sv = np.linalg.lstsq(X, torque.ravel(), rcond=None)
+        spread = np.linalg.svd(directions - directions.mean(axis=0), compute_uv=False)
+        return LoadEstimate(
+            weight_N=weight,
+            mass_kg=weight / STANDARD_GRAVITY_MPS2,
+            center_of_gravity_m=np.asarray(cog, dtype=float),
+            cog_fully_observed=bool(len(R) > 1 and spread[0] > 1e-3 and sv[-1] > 1e-9),
+        )

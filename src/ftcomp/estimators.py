@@ -1,0 +1,169 @@
+"""The two identification methods: the paper's two-stage linear fit and a joint nonlinear fit.
+
+Both take per-pose mean readings ``wrench (P, 6)`` at orientations ``R_base_sensor (P, 3, 3)``
+and return a :class:`Fit`: the parameter vector ``theta = [a (3), F0 (3), M0 (3), P (3)]`` where
+``a`` is the tool's gravity in the base frame (Eq. 5), with its covariance. ``G, U, V`` follow
+from ``a`` (Eq. 10-11); see :mod:`ftcomp.calibration` for the derived quantities.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import least_squares
+
+from ftcomp.model import skew
+
+__all__ = [
+    "Fit",
+    "Method",
+    "fit_joint",
+    "fit_paper",
+    "force_regressor",
+    "predict_wrench",
+    "torque_regressor",
+]
+
+Method = Literal["paper", "joint"]
+
+#: Slices of the parameter vector theta.
+A, F0, M0, P = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
+
+
+@dataclass(frozen=True)
+class Fit:
+    """Estimated parameters ``theta = [a, F0, M0, P]`` (12,) and their covariance (12, 12)."""
+
+    theta: NDArray[np.float64]
+    covariance: NDArray[np.float64]
+
+
+def force_regressor(R_base_sensor: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Eq. 7: rows ``[R_i.T, I]`` stacked, shape (3P, 6), unknowns ``[a, F0]``.
+
+    The paper prints ``R_i`` here; the published numbers come out only with the transpose
+    (``R_base_sensor.T`` maps base-frame gravity into the sensor frame).
+    """
+    n = len(R_base_sensor)
+    blocks = np.concatenate(
+        [np.transpose(R_base_sensor, (0, 2, 1)), np.broadcast_to(np.eye(3), (n, 3, 3))], axis=2
+    )
+    return blocks.reshape(3 * n, 6)
+
+
+def torque_regressor(force: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Eq. 16: rows ``[-skew(f_i), I]`` stacked, shape (3P, 6), unknowns ``[P, b]``."""
+    n = len(force)
+    blocks = np.concatenate(
+        [-np.array([skew(f) for f in force]), np.broadcast_to(np.eye(3), (n, 3, 3))], axis=2
+    )
+    return blocks.reshape(3 * n, 6)
+
+
+def predict_wrench(theta: NDArray[np.float64], R_base_sensor: NDArray[np.float64]) -> NDArray:
+    """The model's reading at each pose, shape (P, 6)."""
+    g_s = theta[A] @ R_base_sensor
+    return np.concatenate([theta[F0] + g_s, theta[M0] + np.cross(theta[P], g_s)], axis=1)
+
+
+def _linear_lstsq(
+    X: NDArray[np.float64], y: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Ordinary least squares with the covariance ``s^2 (X^T X)^-1``, s^2 = RSS / dof."""
+    beta, *_ = np.linalg.lstsq(X, y, rcond=None)
+    dof = max(len(y) - X.shape[1], 1)
+    s2 = float(np.sum((y - X @ beta) ** 2)) / dof
+    return np.asarray(beta, dtype=float), s2 * np.linalg.pinv(X.T @ X)
+
+
+def fit_paper(wrench: NDArray[np.float64], R_base_sensor: NDArray[np.float64]) -> Fit:
+    """The paper's two-stage linear least squares, exactly (Eq. 7-9, 16-19).
+
+    Stage 1 regresses forces on ``[R_i.T, I]`` for ``[a, F0]``; stage 2 regresses torques on the
+    *measured* forces for ``[P, b]`` and recovers ``M0 = b - F0 x P`` (Eq. 19). The covariance
+    treats the two stages as independent and propagates Eq. 19 to first order.
+    """
+    force, torque = wrench[:, :3], wrench[:, 3:]
+    a_f0, cov1 = _linear_lstsq(force_regressor(R_base_sensor), force.ravel())
+    p_b, cov2 = _linear_lstsq(torque_regressor(force), torque.ravel())
+    f0, p, b = a_f0[3:], p_b[:3], p_b[3:]
+    m0 = b - np.cross(f0, p)
+    theta = np.concatenate([a_f0[:3], f0, m0, p])
+    # d theta / d [a, F0, P, b]: M0 = b - F0 x P = b + skew(P) F0 - ... linearised.
+    J = np.zeros((12, 12))
+    J[0:6, 0:6] = np.eye(6)  # a, F0
+    J[6:9, 3:6] = skew(p)  # dM0/dF0 = -d(F0 x P)/dF0 = skew(P)
+    J[6:9, 6:9] = -skew(f0)  # dM0/dP = -skew(F0)
+    J[6:9, 9:12] = np.eye(3)  # dM0/db
+    J[9:12, 6:9] = np.eye(3)  # P
+    cov_in = np.zeros((12, 12))
+    cov_in[:6, :6] = cov1
+    cov_in[6:, 6:] = cov2
+    return Fit(theta, J @ cov_in @ J.T)
+
+
+def _residuals(
+    theta: NDArray[np.float64],
+    R_base_sensor: NDArray[np.float64],
+    wrench: NDArray[np.float64],
+    sigma: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    return ((predict_wrench(theta, R_base_sensor) - wrench) / sigma).ravel()
+
+
+def _jacobian(
+    theta: NDArray[np.float64],
+    R_base_sensor: NDArray[np.float64],
+    wrench: NDArray[np.float64],
+    sigma: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Analytic Jacobian of :func:`_residuals`, shape (6P, 12)."""
+    n = len(R_base_sensor)
+    Rt = np.transpose(R_base_sensor, (0, 2, 1))
+    g_s = theta[A] @ R_base_sensor
+    J = np.zeros((n, 6, 12))
+    J[:, :3, A] = Rt
+    J[:, :3, F0] = np.eye(3)
+    J[:, 3:, A] = skew(theta[P]) @ Rt
+    J[:, 3:, M0] = np.eye(3)
+    J[:, 3:, P] = -np.array([skew(g) for g in g_s])
+    return (J / sigma[:, :, None]).reshape(6 * n, 12)
+
+
+def fit_joint(
+    wrench: NDArray[np.float64],
+    R_base_sensor: NDArray[np.float64],
+    sigma: NDArray[np.float64],
+    initial: NDArray[np.float64],
+) -> Fit:
+    """All parameters together by weighted nonlinear least squares.
+
+    The torque model uses the *modelled* gravity force ``R_i.T a`` rather than the measured force,
+    so noise in the forces does not enter the regressor (the paper's stage 2 suffers from that).
+
+    Args:
+        wrench: per-pose mean readings, shape (P, 6).
+        R_base_sensor: shape (P, 3, 3).
+        sigma: standard deviation of each mean reading, shape (P, 6): the weights.
+        initial: starting theta (12,), e.g. from :func:`fit_paper`.
+
+    Returns:
+        The fit, with covariance ``s^2 (J^T J)^-1``, ``s^2`` the weighted residual variance.
+    """
+    result = least_squares(
+        _residuals,
+        initial,
+        jac=_jacobian,
+        args=(R_base_sensor, wrench, sigma),
+        method="lm",
+        xtol=1e-15,
+        ftol=1e-15,
+        gtol=1e-15,
+    )
+    J = result.jac
+    dof = max(J.shape[0] - J.shape[1], 1)
+    s2 = float(np.sum(result.fun**2)) / dof
+    return Fit(np.asarray(result.x, dtype=float), s2 * np.linalg.pinv(J.T @ J))

@@ -1,0 +1,248 @@
+"""The calibration file: JSON, format ``ftcomp.calibration/1``, written atomically.
+
+Keys (SI units, sensor frame unless stated): ``format``, ``method``, ``tool_weight_N``,
+``tool_mass_kg``, ``center_of_gravity_m`` [3], ``force_bias_N`` [3], ``torque_bias_Nm`` [3],
+``base_tilt_deg`` {``U``, ``V``}, ``gravity_in_base_N`` [3] (base frame), ``std_errors`` (the same
+keys), ``residual_rms`` {``force_N``, ``torque_Nm``}, ``relative_error_percent`` {``per_pose``
+[[6]...], ``mean`` [6]}, ``poses``, and diagnostics (``condition_number``, ``pose_ids``,
+``per_pose_residuals``, ``leave_one_out``, ``warnings``). Unmeasurable values (a relative error
+where the reading is zero) are ``null``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from ftcomp.calibration import Calibration, StandardErrors
+from ftcomp.errors import CalibrationFileError
+from ftcomp.io.atomic import atomic_write_text
+from ftcomp.model import GravityModel
+
+__all__ = [
+    "FORMAT",
+    "calibration_to_dict",
+    "load_calibration",
+    "model_from_dict",
+    "model_to_dict",
+    "save_calibration",
+]
+
+FORMAT = "ftcomp.calibration/1"
+_VECTOR_KEYS = ("center_of_gravity_m", "force_bias_N", "torque_bias_Nm", "gravity_in_base_N")
+_REQUIRED = ("method", "tool_weight_N", *_VECTOR_KEYS[:3], "base_tilt_deg")
+
+
+def _json_array(arr: NDArray[np.float64]) -> Any:
+    """Nested lists with NaN/inf as None (JSON has no NaN)."""
+    return [_json_array(a) if np.ndim(a) else (float(a) if math.isfinite(a) else None) for a in arr]
+
+
+def model_to_dict(model: GravityModel) -> dict[str, Any]:
+    """The physical parameters under the calibration-file keys (also the simulator's truth)."""
+    return {
+        "tool_weight_N": model.weight_N,
+        "tool_mass_kg": model.mass_kg,
+        "center_of_gravity_m": model.center_of_gravity_m.tolist(),
+        "force_bias_N": model.force_bias_N.tolist(),
+        "torque_bias_Nm": model.torque_bias_Nm.tolist(),
+        "base_tilt_deg": {
+            "U": math.degrees(model.tilt_U_rad),
+            "V": math.degrees(model.tilt_V_rad),
+        },
+        "gravity_in_base_N": model.gravity_base_N.tolist(),
+    }
+
+
+def _std_errors_to_dict(se: StandardErrors, model: GravityModel) -> dict[str, Any]:
+    return {
+        "tool_weight_N": se.weight_N,
+        "tool_mass_kg": se.weight_N * model.mass_kg / model.weight_N if model.weight_N else 0.0,
+        "center_of_gravity_m": se.center_of_gravity_m.tolist(),
+        "force_bias_N": se.force_bias_N.tolist(),
+        "torque_bias_Nm": se.torque_bias_Nm.tolist(),
+        "base_tilt_deg": {"U": math.degrees(se.tilt_U_rad), "V": math.degrees(se.tilt_V_rad)},
+        "gravity_in_base_N": se.gravity_base_N.tolist(),
+    }
+
+
+def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
+    """Everything in a calibration file, as JSON-ready data."""
+    force_rms, torque_rms = calibration.residual_rms
+    loo_force, loo_torque = calibration.loo_rms
+    return {
+        "format": FORMAT,
+        "method": calibration.method,
+        **model_to_dict(calibration.model),
+        "std_errors": _std_errors_to_dict(calibration.std_errors, calibration.model),
+        "residual_rms": {"force_N": force_rms, "torque_Nm": torque_rms},
+        "relative_error_percent": {
+            "columns": ["fx", "fy", "fz", "tx", "ty", "tz"],
+            "per_pose": _json_array(calibration.relative_error_percent),
+            "mean": _json_array(calibration.relative_error_mean_percent),
+        },
+        "poses": len(calibration.pose_ids),
+        "pose_ids": list(calibration.pose_ids),
+        "readings_per_pose": calibration.readings_per_pose.astype(int).tolist(),
+        "pose_quaternions_xyzw": _json_array(
+            Rotation.from_matrix(calibration.R_base_sensor).as_quat(canonical=True)
+            if len(calibration.pose_ids)
+            else np.zeros((0, 4))
+        ),
+        "pose_mean_wrench": _json_array(calibration.wrench_mean),
+        "condition_number": calibration.condition_number,
+        "per_pose_residuals": _json_array(calibration.residuals),
+        "leave_one_out": {
+            "per_pose": _json_array(calibration.loo_error),
+            "rms": {
+                "force_N": loo_force if math.isfinite(loo_force) else None,
+                "torque_Nm": loo_torque if math.isfinite(loo_torque) else None,
+            },
+        },
+        "warnings": list(calibration.warnings),
+    }
+
+
+def save_calibration(path: str | os.PathLike[str], calibration: Calibration) -> None:
+    """Write a calibration file atomically (a temporary file, then rename)."""
+    text = json.dumps(calibration_to_dict(calibration), indent=2, allow_nan=False)
+    atomic_write_text(path, text + "\n")
+
+
+def _number(data: dict[str, Any], key: str, source: str) -> float:
+    value = data.get(key)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise CalibrationFileError(f"{source}: {key!r} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise CalibrationFileError(f"{source}: {key!r} is not finite ({value})")
+    return float(value)
+
+
+def _vector(data: dict[str, Any], key: str, source: str) -> NDArray[np.float64]:
+    value = data.get(key)
+    if not isinstance(value, list) or len(value) != 3:
+        raise CalibrationFileError(f"{source}: {key!r} must be a list of 3 numbers, got {value!r}")
+    return np.array([_number({key: v}, key, source) for v in value])
+
+
+def model_from_dict(data: dict[str, Any], source: str = "<dict>") -> GravityModel:
+    """Read the physical parameters back from calibration-file keys (checked)."""
+    for key in _REQUIRED:
+        if key not in data:
+            raise CalibrationFileError(f"{source}: missing key {key!r}")
+    tilt = data["base_tilt_deg"]
+    if not isinstance(tilt, dict):
+        raise CalibrationFileError(f"{source}: 'base_tilt_deg' must be an object {{U, V}}")
+    U = _number(tilt, "U", f"{source}: base_tilt_deg")
+    V = _number(tilt, "V", f"{source}: base_tilt_deg")
+    weight = _number(data, "tool_weight_N", source)
+    if weight < 0.0:
+        raise CalibrationFileError(f"{source}: 'tool_weight_N' must be >= 0, got {weight}")
+    return GravityModel(
+        weight,
+        _vector(data, "center_of_gravity_m", source),
+        _vector(data, "force_bias_N", source),
+        _vector(data, "torque_bias_Nm", source),
+        tilt_U_rad=math.radians(U),
+        tilt_V_rad=math.radians(V),
+    )
+
+
+def _optional_array(data: Any, shape: tuple[int, ...]) -> NDArray[np.float64]:
+    try:
+        arr = np.array(data, dtype=float)
+    except (TypeError, ValueError):
+        return np.full(shape, np.nan)
+    return arr if arr.shape == shape else np.full(shape, np.nan)
+
+
+def _object(value: Any) -> dict[str, Any]:
+    return value if isinstance(value, dict) else {}
+
+
+def _list(value: Any) -> list[Any]:
+    return value if isinstance(value, list) else []
+
+
+def _pose_rotations(data: Any, n: int) -> NDArray[np.float64]:
+    quat = _optional_array(data, (n, 4))
+    if n == 0 or not np.all(np.isfinite(quat)) or np.any(np.linalg.norm(quat, axis=1) == 0):
+        return np.full((n, 3, 3), np.nan)
+    return np.asarray(Rotation.from_quat(quat).as_matrix(), dtype=float).reshape(n, 3, 3)
+
+
+def load_calibration(path: str | os.PathLike[str]) -> Calibration:
+    """Read and check a calibration file.
+
+    The physical parameters must be present and finite; the diagnostics are read where present
+    (NaN where absent), so a hand-written file with just the parameters also loads.
+
+    Raises:
+        CalibrationFileError: unreadable, not JSON, unknown format, missing keys, NaN.
+    """
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CalibrationFileError(f"{source}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CalibrationFileError(f"{source}: cannot read ({exc})") from None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise CalibrationFileError(
+            f"{source}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})"
+        ) from None
+    if not isinstance(data, dict):
+        raise CalibrationFileError(f"{source}: expected a JSON object")
+    if data.get("format") != FORMAT:
+        raise CalibrationFileError(
+            f"{source}: unknown format {data.get('format')!r}; expected {FORMAT!r}"
+        )
+    if data.get("method") not in ("paper", "joint"):
+        raise CalibrationFileError(
+            f"{source}: 'method' must be 'paper' or 'joint', got {data.get('method')!r}"
+        )
+    model = model_from_dict(data, source)
+    se_data = _object(data.get("std_errors"))
+    se_tilt = _object(se_data.get("base_tilt_deg"))
+
+    def se_scalar(value: Any) -> float:
+        return float(value) if isinstance(value, (int, float)) else math.nan
+
+    std_errors = StandardErrors(
+        weight_N=se_scalar(se_data.get("tool_weight_N")),
+        center_of_gravity_m=_optional_array(se_data.get("center_of_gravity_m"), (3,)),
+        force_bias_N=_optional_array(se_data.get("force_bias_N"), (3,)),
+        torque_bias_Nm=_optional_array(se_data.get("torque_bias_Nm"), (3,)),
+        tilt_U_rad=math.radians(se_scalar(se_tilt.get("U"))),
+        tilt_V_rad=math.radians(se_scalar(se_tilt.get("V"))),
+        gravity_base_N=_optional_array(se_data.get("gravity_in_base_N"), (3,)),
+    )
+    ids = _list(data.get("pose_ids"))
+    n = len(ids)
+    relative = data.get("relative_error_percent")
+    per_pose = relative.get("per_pose") if isinstance(relative, dict) else None
+    loo = data.get("leave_one_out")
+    cond = data.get("condition_number")
+    return Calibration(
+        model=model,
+        method=data["method"],
+        std_errors=std_errors,
+        pose_ids=tuple(str(i) for i in ids),
+        R_base_sensor=_pose_rotations(data.get("pose_quaternions_xyzw"), n),
+        wrench_mean=_optional_array(data.get("pose_mean_wrench"), (n, 6)),
+        readings_per_pose=_optional_array(data.get("readings_per_pose"), (n,)),
+        residuals=_optional_array(data.get("per_pose_residuals"), (n, 6)),
+        relative_error_percent=_optional_array(per_pose, (n, 6)),
+        loo_error=_optional_array(loo.get("per_pose") if isinstance(loo, dict) else None, (n, 6)),
+        condition_number=float(cond) if isinstance(cond, (int, float)) else math.nan,
+        warnings=tuple(w for w in _list(data.get("warnings")) if isinstance(w, str)),
+    )
