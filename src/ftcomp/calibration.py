@@ -241,13 +241,17 @@ def _model(theta: NDArray[np.float64]) -> GravityModel:
     return GravityModel.from_gravity_in_base(theta[0:3], theta[9:12], theta[3:6], theta[6:9])
 
 
-def calibrate(samples: Samples, *, method: Method = "joint") -> Calibration:
+def calibrate(
+    samples: Samples, *, method: Method = "joint", leave_one_out: bool = True
+) -> Calibration:
     """Identify the sensor bias, tool weight and centre of gravity and the base tilt.
 
     Args:
         samples: readings at three or more distinct poses (see :func:`ftcomp.io.read_samples`).
         method: ``"paper"`` for the paper's two-stage linear least squares (Eq. 7-11, 16-19),
             ``"joint"`` for the weighted joint nonlinear fit (the default).
+        leave_one_out: also refit without each pose in turn to measure prediction error
+            (``loo_error`` is NaN when false or with only 3 poses).
 
     Raises:
         IdentificationError: fewer than 3 distinct poses, or poses that cannot separate bias
@@ -278,7 +282,7 @@ def calibrate(samples: Samples, *, method: Method = "joint") -> Calibration:
     relative[~np.isfinite(relative)] = np.nan
 
     loo = np.full_like(wrench, np.nan)
-    if len(ids) > 3:
+    if leave_one_out and len(ids) > 3:
         for k in range(len(ids)):
             keep = np.arange(len(ids)) != k
             try:
