@@ -53,6 +53,7 @@ def run(args: argparse.Namespace) -> int:
     output = check_writable(args.output, overwrite=args.force)
     force_range, torque_range = args.range if args.range else (None, None)
     samples = read_samples(args.samples, force_range_N=force_range, torque_range_Nm=torque_range)
+    print_warnings(samples.warnings)
     result = calibrate(samples, method=args.method)
     save_calibration(output, result)
     if args.json:
@@ -61,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         out = console()
         render_calibration(result, out)
         out.print(f"calibration written to [bold]{output}[/bold]")
-    print_warnings(result.warnings)
+    print_warnings(w for w in result.warnings if w not in samples.warnings)
     return 0
 
 

@@ -46,6 +46,7 @@ def run(args: argparse.Namespace) -> int:
     calibration = load_calibration(args.calibration)
     force_range, torque_range = args.range if args.range else (None, None)
     samples = read_samples(args.samples, force_range_N=force_range, torque_range_Nm=torque_range)
+    print_warnings(samples.warnings)
     clash = [c for c in EXTRA_COLUMNS if c in samples.header]
     if clash:
         raise ParameterError(
@@ -69,5 +70,4 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(summary, indent=2))
     else:
         print(f"{len(rows)} rows compensated; written to {output}")
-    print_warnings(samples.warnings)
     return 0

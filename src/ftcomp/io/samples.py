@@ -248,7 +248,7 @@ def read_samples(
     elif encoding == "rotvec":
         rotations = Rotation.from_rotvec(orient)
     else:
-        if np.max(np.abs(orient)) <= math.pi and np.max(np.abs(orient)) > 0.0:
+        if 0.0 < np.max(np.abs(orient)) <= math.pi + 1e-3:  # radians, rounded
             warnings.append(
                 f"{source}: every alpha_deg, beta_deg, gamma_deg is within +-pi: were the "
                 "angles given in radians? They are read as degrees"
