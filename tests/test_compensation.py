@@ -83,3 +83,15 @@ def test_one_pose_observes_only_the_cog_across_gravity(rng) -> None:
     est = GravityCompensator(TRUE_MODEL).estimate_load(w, R)
     assert not est.cog_fully_observed
     assert est.weight_N == pytest.approx(2.0, abs=1e-12)
+
+
+def test_batch_can_write_into_a_given_buffer(rng) -> None:
+    R = Rotation.random(10, rng=rng).as_matrix()
+    w = rng.normal(size=(10, 6))
+    comp = GravityCompensator(TRUE_MODEL)
+    buffer = np.empty((10, 6))
+    result = comp.compensate(w, R, out=buffer)
+    assert result is buffer
+    np.testing.assert_allclose(buffer, comp.compensate(w, R), atol=1e-12)
+    with pytest.raises(ParameterError, match="C-contiguous float64 array of shape"):
+        comp.compensate(w, R, out=np.empty((10, 6), dtype=np.float32))

@@ -55,16 +55,29 @@ class GravityCompensator:
         self._bias = np.concatenate([model.force_bias_N, model.torque_bias_Nm])
         # [F; M] of the tool gravity = A @ g_s with A = [I; skew(P)] (Eq. 12, 20).
         self._A = np.vstack([np.eye(3), skew(model.center_of_gravity_m)])
-        self._A_T = np.ascontiguousarray(self._A.T)
+        # For a batch, fold R.T @ g and A into one (9, 6) matrix acting on R flattened row-major:
+        # g_s[j] = sum_i g[i] R[i, j], so R.reshape(N, 9) @ K gives every g_s with K[3i+j, j] = g[i].
+        K = np.zeros((9, 3))
+        for i in range(3):
+            K[3 * i : 3 * i + 3, :] = self._gravity_base[i] * np.eye(3)
+        self._batch_matrix = K @ self._A.T
         unit = self._gravity_base / np.linalg.norm(self._gravity_base) if model.weight_N else None
         self._gravity_dir_base = unit
 
-    def compensate(self, wrench_sensor: ArrayLike, R_base_sensor: ArrayLike) -> NDArray[np.float64]:
+    def compensate(
+        self,
+        wrench_sensor: ArrayLike,
+        R_base_sensor: ArrayLike,
+        *,
+        out: NDArray[np.float64] | None = None,
+    ) -> NDArray[np.float64]:
         """Contact wrench ``[F'; M']`` (Eq. 22) [N, N*m], sensor frame.
 
         Args:
             wrench_sensor: raw reading(s), shape (6,) or (N, 6), sensor frame.
             R_base_sensor: the sensor's orientation(s) in the base frame, (3, 3) or (N, 3, 3).
+            out: for a batch, an optional C-contiguous float64 (N, 6) array to write into
+                (saves allocating a fresh result when streaming blocks of readings).
 
         Returns:
             Shape (6,) or (N, 6).
@@ -74,8 +87,12 @@ class GravityCompensator:
         if w.shape == (6,) and R.shape == (3, 3):
             return w - self._bias - self._A @ (self._gravity_base @ R)
         if w.ndim == 2 and w.shape[1] == 6 and R.shape == (len(w), 3, 3):
-            g_s = self._gravity_base @ R  # (N, 3): R_i.T @ g for every i
-            out = g_s @ self._A_T
+            if out is None:
+                out = np.empty((len(w), 6))
+            elif out.shape != w.shape or out.dtype != np.float64 or not out.flags.c_contiguous:
+                raise ParameterError("out must be a C-contiguous float64 array of shape (N, 6)")
+            # Tool gravity wrench of every sample in one (N, 9) @ (9, 6) product.
+            np.dot(np.ascontiguousarray(R).reshape(len(R), 9), self._batch_matrix, out=out)
             np.subtract(w, out, out=out)
             out -= self._bias
             return out
