@@ -56,7 +56,7 @@ class GravityCompensator:
         # [F; M] of the tool gravity = A @ g_s with A = [I; skew(P)] (Eq. 12, 20).
         self._A = np.vstack([np.eye(3), skew(model.center_of_gravity_m)])
         # For a batch, fold R.T @ g and A into one (9, 6) matrix acting on R flattened row-major:
-        # g_s[j] = sum_i g[i] R[i, j], so R.reshape(N, 9) @ K gives every g_s with K[3i+j, j] = g[i].
+        # g_s[j] = sum_i g[i] R[i, j], so R.reshape(N, 9) @ K gives every g_s, K[3i+j, j] = g[i].
         K = np.zeros((9, 3))
         for i in range(3):
             K[3 * i : 3 * i + 3, :] = self._gravity_base[i] * np.eye(3)
