@@ -158,6 +158,7 @@ class AdmittanceController:
         R_base_sensor: ArrayLike,
         now: float,
         dt: float,
+        twist_nominal_base: ArrayLike | None = None,
     ) -> tuple[ControllerState, NDArray[np.float64]]:
         """One control period.
 
@@ -169,6 +170,8 @@ class AdmittanceController:
             R_base_sensor: the sensor's orientation now, shape (3, 3).
             now: the robot's clock [s].
             dt: control period [s], > 0.
+            twist_nominal_base: planned motion [m/s, rad/s], base frame, shape (6,), that the
+                law's ΔV is added to (the paper's ΔV is an offset); None: standing still.
 
         Returns:
             ``(new_state, twist_base)`` [m/s, rad/s], base frame, shape (6,); zeros once
@@ -192,7 +195,10 @@ class AdmittanceController:
         law_state, twist = self.law.step(
             state.law, self._to_control(w_filt, R) - self.wrench_desired, dt
         )
-        twist_base = limit_twist(self.limits, self._twist_to_base(twist, R), state.twist_base, dt)
+        twist_base = self._twist_to_base(twist, R)
+        if twist_nominal_base is not None:
+            twist_base = twist_base + np.asarray(twist_nominal_base, dtype=float)
+        twist_base = limit_twist(self.limits, twist_base, state.twist_base, dt)
         travel, reason = check_travel(self.limits, state.travel_base, twist_base, dt)
         new = ControllerState(law_state, zi, watchdog, w_filt, twist_base, travel, None)
         if reason is not None:
