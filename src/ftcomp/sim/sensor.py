@@ -1,0 +1,249 @@
+"""The F/T sensor model: what a real six-axis sensor makes of the wrench MuJoCo computes.
+
+MuJoCo's ``force``/``torque`` sensors at ``ft_site`` report the wrench the parent (the sensor's
+fixed housing) exerts on the child subtree (sensing end, gripper, what they carry), in the site
+frame. A real sensor reports the opposite: the load the tool puts on it. So the *ideal* reading is
+the negated MuJoCo sensor data; on top of it :class:`SensorSpec` adds, in this order, bias
+``F0, M0``, Gaussian noise, quantisation to the resolution, and saturation at the range (a reading
+beyond the overload limit also sets a latched ``overloaded`` flag). Readings come at the output rate
+(1.2 kHz), stamped with the sensor's tick time; the physics state between ticks is held.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Final
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ftcomp.errors import ParameterError
+from ftcomp.interfaces import WrenchSample
+
+__all__ = ["PAPER_FORCE_BIAS_N", "PAPER_TORQUE_BIAS_Nm", "SensorSpec", "SimWrenchSensor"]
+
+#: The paper's identified sensor zero (section 2.2.1) [N] and [N*m], sensor frame.
+PAPER_FORCE_BIAS_N: Final = (-0.8613, 1.1015, 0.1976)
+PAPER_TORQUE_BIAS_Nm: Final = (-0.0002, -0.0605, 0.0255)
+
+_NOISE_BLOCK: Final = 4096
+
+
+def _vec3(name: str, value: object) -> NDArray[np.float64]:
+    arr = np.array(value, dtype=float)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ParameterError(f"SensorSpec.{name} must be 3 finite numbers, got {value!r}")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True)
+class SensorSpec:
+    """A six-axis F/T sensor's specification; defaults are the paper's sensor.
+
+    Attributes:
+        force_range_N: measuring range of each force axis, +- [N] (readings saturate there).
+        torque_range_Nm: measuring range of each torque axis, +- [N*m].
+        overload_force_percent: overload limit in percent of the force range.
+        overload_torque_percent: overload limit in percent of the torque range.
+        resolution_fraction_of_range: quantisation step as a fraction of the range (1/2000);
+            0 turns quantisation off.
+        force_noise_std_N: standard deviation of the Gaussian force noise [N] per sample.
+        torque_noise_std_Nm: standard deviation of the Gaussian torque noise [N*m] per sample.
+        force_bias_N: zero offset F0 [N], sensor frame.
+        torque_bias_Nm: zero offset M0 [N*m], sensor frame.
+        output_rate_Hz: output rate [Hz].
+
+    The paper gives no noise figure; the default noise is one resolution count (0.125 N,
+    0.003 N*m), which also dithers the quantiser so that means of many readings are unbiased.
+    """
+
+    force_range_N: float = 250.0
+    torque_range_Nm: float = 6.0
+    overload_force_percent: float = 400.0
+    overload_torque_percent: float = 200.0
+    resolution_fraction_of_range: float = 1.0 / 2000.0
+    force_noise_std_N: float = 0.125
+    torque_noise_std_Nm: float = 0.003
+    force_bias_N: NDArray[np.float64] = field(default_factory=lambda: np.array(PAPER_FORCE_BIAS_N))
+    torque_bias_Nm: NDArray[np.float64] = field(
+        default_factory=lambda: np.array(PAPER_TORQUE_BIAS_Nm)
+    )
+    output_rate_Hz: float = 1200.0
+
+    def __post_init__(self) -> None:
+        positive = ("force_range_N", "torque_range_Nm", "output_rate_Hz")
+        percent = ("overload_force_percent", "overload_torque_percent")
+        nonnegative = ("resolution_fraction_of_range", "force_noise_std_N", "torque_noise_std_Nm")
+        for name in positive:
+            value = getattr(self, name)
+            if not math.isfinite(value) or value <= 0.0:
+                raise ParameterError(f"SensorSpec.{name} must be finite and > 0, got {value}")
+        for name in percent:
+            value = getattr(self, name)
+            if not math.isfinite(value) or value < 100.0:
+                raise ParameterError(f"SensorSpec.{name} must be >= 100 %, got {value}")
+        for name in nonnegative:
+            value = getattr(self, name)
+            if not math.isfinite(value) or value < 0.0:
+                raise ParameterError(f"SensorSpec.{name} must be finite and >= 0, got {value}")
+        if self.resolution_fraction_of_range >= 1.0:
+            raise ParameterError("SensorSpec.resolution_fraction_of_range must be below 1")
+        for name in ("force_bias_N", "torque_bias_Nm"):
+            object.__setattr__(self, name, _vec3(name, getattr(self, name)))
+
+    def ideal(self) -> SensorSpec:
+        """The same sensor without noise and quantisation (bias, range and rate kept)."""
+        return replace(
+            self, force_noise_std_N=0.0, torque_noise_std_Nm=0.0, resolution_fraction_of_range=0.0
+        )
+
+    def unbiased(self) -> SensorSpec:
+        """The same sensor with zero bias."""
+        return replace(self, force_bias_N=np.zeros(3), torque_bias_Nm=np.zeros(3))
+
+    @property
+    def range_6(self) -> NDArray[np.float64]:
+        """Measuring range per axis ``[F, F, F, M, M, M]``, shape (6,)."""
+        return np.repeat([self.force_range_N, self.torque_range_Nm], 3)
+
+    @property
+    def step_6(self) -> NDArray[np.float64]:
+        """Quantisation step per axis, shape (6,) (zeros: no quantisation)."""
+        return self.range_6 * self.resolution_fraction_of_range
+
+    @property
+    def noise_std_6(self) -> NDArray[np.float64]:
+        """Noise standard deviation per axis, shape (6,)."""
+        return np.repeat([self.force_noise_std_N, self.torque_noise_std_Nm], 3)
+
+    @property
+    def overload_6(self) -> NDArray[np.float64]:
+        """Overload limit per axis, shape (6,)."""
+        return (
+            self.range_6
+            * np.repeat([self.overload_force_percent, self.overload_torque_percent], 3)
+            / 100.0
+        )
+
+    @property
+    def bias_6(self) -> NDArray[np.float64]:
+        """``[F0, M0]``, shape (6,)."""
+        return np.concatenate([self.force_bias_N, self.torque_bias_Nm])
+
+    def apply(
+        self, ideal_wrench: ArrayLike, standard_normal: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Turn ideal wrenches into readings.
+
+        Args:
+            ideal_wrench: the load on the sensor [N, N*m], sensor frame, shape (6,) or (N, 6).
+            standard_normal: standard normal draws of the same shape (scaled here by the noise).
+
+        Returns:
+            ``(readings, overloaded)``: readings of the same shape; overloaded per row (any axis
+            beyond its overload limit).
+        """
+        ideal = np.asarray(ideal_wrench, dtype=float)
+        loaded = ideal + self.bias_6
+        overloaded = np.any(np.abs(loaded) > self.overload_6, axis=-1)
+        reading = loaded + np.asarray(standard_normal, dtype=float) * self.noise_std_6
+        step = self.step_6
+        if self.resolution_fraction_of_range > 0.0:
+            reading = np.round(reading / step) * step
+        rng = self.range_6
+        return np.clip(reading, -rng, rng), np.asarray(overloaded)
+
+
+class SimWrenchSensor:
+    """The simulated sensor: implements :class:`ftcomp.interfaces.WrenchSensor`.
+
+    Args:
+        spec: the sensor's specification.
+        ideal_wrench: returns the current ideal load on the sensor [N, N*m], shape (6,).
+        clock: returns the current simulation time [s].
+        seed: seeds the noise (``np.random.default_rng``); one noise draw per new output tick,
+            so the same sequence of calls gives the same readings.
+    """
+
+    def __init__(
+        self,
+        spec: SensorSpec,
+        ideal_wrench: Callable[[], NDArray[np.float64]],
+        clock: Callable[[], float],
+        *,
+        seed: int | None,
+    ) -> None:
+        self._spec = spec
+        self._ideal = ideal_wrench
+        self._clock = clock
+        self._rng = np.random.default_rng(seed)
+        self._block = np.empty((0, 6))
+        self._next = 0
+        self._last_tick = -1
+        self._last: WrenchSample | None = None
+        self._overloaded = False
+        # Hot-path copies (read() runs every control cycle).
+        self._bias = spec.bias_6
+        self._std = spec.noise_std_6
+        self._step = spec.step_6 if spec.resolution_fraction_of_range > 0.0 else None
+        self._range = spec.range_6
+        self._overload = spec.overload_6
+
+    @property
+    def spec(self) -> SensorSpec:
+        """The sensor's specification."""
+        return self._spec
+
+    @property
+    def overloaded(self) -> bool:
+        """True once any reading has exceeded the overload limit (latched)."""
+        return self._overloaded
+
+    def tick(self, t_s: float) -> int:
+        """Index of the newest output tick at time ``t_s`` [s]."""
+        return math.floor(t_s * self._spec.output_rate_Hz + 1e-6)
+
+    def _draw(self, n: int) -> NDArray[np.float64]:
+        """The next ``n`` rows of standard normal noise, shape (n, 6)."""
+        out = np.empty((n, 6))
+        filled = 0
+        while filled < n:
+            if self._next >= len(self._block):
+                self._block = self._rng.standard_normal((_NOISE_BLOCK, 6))
+                self._next = 0
+            take = min(n - filled, len(self._block) - self._next)
+            out[filled : filled + take] = self._block[self._next : self._next + take]
+            self._next += take
+            filled += take
+        return out
+
+    def convert(self, ideal_wrench: ArrayLike) -> NDArray[np.float64]:
+        """Readings for ideal wrenches at consecutive new ticks, shape (N, 6) (draws noise)."""
+        ideal = np.atleast_2d(np.asarray(ideal_wrench, dtype=float))
+        readings, overloaded = self._spec.apply(ideal, self._draw(len(ideal)))
+        self._overloaded = self._overloaded or bool(np.any(overloaded))
+        return readings
+
+    def read(self) -> WrenchSample:
+        """The newest reading, stamped with its output tick [s] (non-blocking)."""
+        k = self.tick(self._clock())
+        if k == self._last_tick and self._last is not None:
+            return self._last
+        if self._next >= len(self._block):
+            self._block = self._rng.standard_normal((_NOISE_BLOCK, 6))
+            self._next = 0
+        noise = self._block[self._next]
+        self._next += 1
+        loaded = self._ideal() + self._bias
+        if not self._overloaded and np.any(np.abs(loaded) > self._overload):
+            self._overloaded = True
+        reading = loaded + noise * self._std
+        if self._step is not None:
+            reading = np.round(reading / self._step) * self._step
+        np.clip(reading, -self._range, self._range, out=reading)
+        self._last_tick = k
+        self._last = WrenchSample(k / self._spec.output_rate_Hz, reading)
+        return self._last
