@@ -80,7 +80,7 @@ class FakeCell:
     # Sensor
     def read(self) -> WrenchSample:
         load = (
-            np.array([0.0, 0.0, -self.weight + self.surface_contact_force_N()])
+            np.array([0.0, 0.0, -self.weight + self.true_contact_force_N()])
             if self.grasped
             else np.zeros(3)
         )
@@ -96,7 +96,10 @@ class FakeCell:
     def load_clearance_m(self) -> float:
         return self.z - 0.1
 
-    def surface_contact_force_N(self) -> float:
+    def move_to_clearance(self, clearance_m: float) -> None:
+        self.z, self.v, self.v_cmd = 0.1 + clearance_m, 0.0, 0.0
+
+    def true_contact_force_N(self) -> float:
         gap = self.load_clearance_m()
         if gap >= 0.0 or not self.grasped:
             return 0.0

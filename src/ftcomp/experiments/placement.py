@@ -47,6 +47,7 @@ from ftcomp.control import (
     CombinedLaw,
     LowPassFilter,
     SafetyLimits,
+    selection_matrix,
 )
 from ftcomp.errors import ParameterError
 from ftcomp.interfaces import Robot, WrenchSample, WrenchSensor
@@ -54,18 +55,28 @@ from ftcomp.model import GravityModel
 
 __all__ = [
     "COLUMNS",
+    "DEFAULT_GAINS",
     "FaultKind",
     "FaultySensor",
     "PlacementCell",
     "PlacementConfig",
     "PlacementControl",
     "PlacementResult",
+    "SimPlacementCell",
+    "plot_placement",
     "run_placement",
     "sweep_gains",
     "write_placement_outputs",
 ]
 
 PlacementControl = Literal["position", "admittance"]
+
+#: Admittance gains (K1 [m/N], K2 [m/(s*N)]) that place 500 g gently on each surface of the
+#: simulated cell. The book's contact (with the arm's servo) is ~1.5e5 N/m stiff: the K1 term
+#: needs K1 * stiffness < 1 (0.1 mm/N gives 15 and rings), and K2 * stiffness must stay below the
+#: filter's bandwidth, so the book gets K1 = 0 and the paper's K2 = 0.1 mm/(s*N). The sponge
+#: (1500 N/m) takes the paper's K1 and a K2 ten times the paper's to settle in seconds.
+DEFAULT_GAINS: dict[str, tuple[float, float]] = {"sponge": (1e-4, 1e-3), "book": (0.0, 1e-4)}
 FaultKind = Literal["nan", "repeat", "spike", "stop"]
 
 #: Columns of ``timeseries.csv`` (see the module docstring for signs).
@@ -81,7 +92,7 @@ COLUMNS = (
 
 
 class PlacementCell(Protocol):
-    """What the experiment needs of a cell (the MuJoCo cell or a real one with a scale).
+    """What the experiment needs of a cell (the MuJoCo cell, or a real one with a scale).
 
     The load is grasped and hangs from the gripper when the experiment starts.
     """
@@ -96,12 +107,12 @@ class PlacementCell(Protocol):
         """The wrist F/T sensor."""
         ...
 
-    def surface_contact_force_N(self) -> float:
-        """True force the surface pushes on the load, upward [N] (0 without contact)."""
+    def move_to_clearance(self, clearance_m: float) -> None:
+        """Blocking move holding the load's bottom ``clearance_m`` [m] above the surface."""
         ...
 
-    def load_clearance_m(self) -> float:
-        """True gap between the load's bottom and the surface top [m] (< 0: compressed)."""
+    def true_contact_force_N(self) -> float:
+        """True force the surface pushes up on the load [N] (0 without contact)."""
         ...
 
     def load_weight_N(self) -> float:
@@ -113,6 +124,75 @@ class PlacementCell(Protocol):
         ...
 
 
+class SimPlacementCell:
+    """The MuJoCo cell (:class:`ftcomp.sim.cell.SimCell`) as a :class:`PlacementCell`.
+
+    Args:
+        surface: ``"sponge"`` or ``"book"``.
+        load_kg: mass of the grasped load [kg].
+        seed: sensor-noise seed.
+        sensor_spec: the sensor model (default: the paper's).
+
+    Attributes:
+        cell: the underlying :class:`~ftcomp.sim.cell.SimCell`.
+        tool_model: the true gravity model of the tool *without* the load (what a calibration
+            of the empty gripper finds), taken before grasping.
+    """
+
+    def __init__(
+        self,
+        surface: str,
+        load_kg: float = 0.5,
+        *,
+        seed: int | None = 0,
+        sensor_spec: Any = None,
+    ) -> None:
+        from ftcomp.sim.cell import SimCell
+        from ftcomp.sim.scene import SceneConfig
+        from ftcomp.sim.tool import LoadSpec
+
+        if surface not in ("sponge", "book"):
+            raise ParameterError(f"surface must be 'sponge' or 'book', got {surface!r}")
+        if not (math.isfinite(load_kg) and load_kg > 0.0):
+            raise ParameterError(f"load_kg must be > 0, got {load_kg}")
+        load = LoadSpec(load_kg)
+        self._weight_N = load.weight_N
+        self.cell = SimCell(
+            SceneConfig(load=load, surface=surface),  # type: ignore[arg-type]
+            sensor_spec,
+            seed=seed,
+        )
+        self.cell.hold_above_surface(0.02, 0.5)
+        self.tool_model = self.cell.true_gravity_model()
+        self.cell.grasp()
+
+    @property
+    def robot(self) -> Robot:
+        """The arm."""
+        return self.cell
+
+    @property
+    def sensor(self) -> WrenchSensor:
+        """The wrist F/T sensor."""
+        return self.cell.sensor
+
+    def move_to_clearance(self, clearance_m: float) -> None:
+        """Blocking move holding the load ``clearance_m`` [m] above the surface."""
+        self.cell.hold_above_surface(clearance_m, 0.3)
+
+    def true_contact_force_N(self) -> float:
+        """The simulator's vertical contact force on the load [N]."""
+        return self.cell.true_contact_force_N()
+
+    def load_weight_N(self) -> float:
+        """The load's weight [N]."""
+        return self._weight_N
+
+    def release(self) -> None:
+        """Open the gripper."""
+        self.cell.release()
+
+
 @dataclass(frozen=True)
 class PlacementConfig:
     """Settings of one placement run (SI units).
@@ -122,7 +202,10 @@ class PlacementConfig:
         compensation: use the gravity-compensated wrench (False: raw readings).
         k1_m_per_N: K1 on the gravity axis [m/N] (paper k13 = 0.1 mm/N = 1e-4 m/N).
         k2_m_per_s_N: K2 on the gravity axis [m/(s*N)] (paper k23 = 0.1 mm/(s*N)).
-        filter_cutoff_hz: low-pass cut-off of the wrench fed to the law and the decision [Hz].
+        filter_cutoff_hz: low-pass cut-off of the wrench fed to the law [Hz]; its lag must stay
+            well below the contact loop's crossover (stiffness * K2) or a stiff surface rings.
+        decision_cutoff_hz: slower low-pass for the placement decision [Hz] (sensor noise of
+            0.125 N per sample must fall well inside the band).
         band_N: placed when |filtered force along gravity| <= band_N ... [N]
         settle_time_s: ... for this long [s].
         approach_gap_m: clearance between load and surface at the start [m].
@@ -144,7 +227,8 @@ class PlacementConfig:
     compensation: bool = True
     k1_m_per_N: float = 1e-4
     k2_m_per_s_N: float = 1e-3
-    filter_cutoff_hz: float = 5.0
+    filter_cutoff_hz: float = 20.0
+    decision_cutoff_hz: float = 2.0
     band_N: float = 0.05
     settle_time_s: float = 0.3
     approach_gap_m: float = 0.002
@@ -170,6 +254,7 @@ class PlacementConfig:
                 raise ParameterError(f"{name} must be finite and >= 0, got {value}")
         for name in (
             "filter_cutoff_hz",
+            "decision_cutoff_hz",
             "band_N",
             "settle_time_s",
             "approach_gap_m",
@@ -222,7 +307,7 @@ class FaultySensor:
         if self.kind == "nan":
             return WrenchSample(sample.t, np.full(6, math.nan))
         if self.kind == "spike":
-            return WrenchSample(sample.t, sample.wrench_sensor + [0, 0, 100.0, 0, 0, 0])
+            return WrenchSample(sample.t, sample.wrench_sensor + np.array([0, 0, 100.0, 0, 0, 0]))
         previous = self._last if self._last is not None else sample
         if self.kind == "stop":
             self._last = previous
@@ -262,11 +347,8 @@ def run_placement(
     dt = robot.control_period_s
     up_base = -model.gravity_base_N / np.linalg.norm(model.gravity_base_N)
 
-    # Start pose: the load approach_gap_m above the surface.
-    p0, R0 = robot.sensor_pose()
-    p_start = p0 + (config.approach_gap_m - cell.load_clearance_m()) * up_base
-    robot.move_pose(p_start, R0, 0.3)
-    for _ in range(int(round(0.1 / dt))):
+    cell.move_to_clearance(config.approach_gap_m)
+    for _ in range(round(0.1 / dt)):
         robot.wait_cycle()
 
     compensator = GravityCompensator(model) if config.compensation else None
@@ -276,16 +358,16 @@ def run_placement(
     if not admittance:
         max_travel_z += config.position_depth_m
     limits = SafetyLimits(
-        max_twist=[config.max_speed_m_per_s] * 3 + [0.5] * 3,
-        max_twist_rate=[config.max_accel_m_per_s2] * 3 + [5.0] * 3,
-        max_travel=[0.005, 0.005, max_travel_z, 0.1, 0.1, 0.1],
+        max_twist=np.array([config.max_speed_m_per_s] * 3 + [0.5] * 3),
+        max_twist_rate=np.array([config.max_accel_m_per_s2] * 3 + [5.0] * 3),
+        max_travel=np.array([0.005, 0.005, max_travel_z, 0.1, 0.1, 0.1]),
         max_force_N=config.max_force_N,
         max_torque_Nm=config.max_force_N * 0.2,
         stale_after_s=config.stale_after_s,
     )
     k1, k2 = (config.k1_m_per_N, config.k2_m_per_s_N) if admittance else (0.0, 0.0)
     controller = AdmittanceController(
-        law=CombinedLaw(k1, k2, "z"),
+        law=CombinedLaw(np.array(k1), np.array(k2), selection_matrix("z")),
         wrench_filter=LowPassFilter(config.filter_cutoff_hz, dt),
         limits=limits,
         frame="base",
@@ -304,12 +386,17 @@ def run_placement(
     if not np.all(np.isfinite(w0)):
         w0 = np.zeros(6)  # the watchdog stops at the first step
     state = controller.initial_state(w0, R)
+    decision_filter = LowPassFilter(config.decision_cutoff_hz, dt, order=1, channels=1)
+    f0 = float(-(R @ w0[:3]) @ up_base)
+    decision_state = decision_filter.initial_state([f0])
     t0 = robot.time()
     rows: list[tuple[float, ...]] = []
     outcome = "timeout"
     in_band_since: float | None = None
+    placed_at: float | None = None
     decision_index: int | None = None
     p_prev = p_ref
+    f_dec = np.array([f0])
     while robot.time() - t0 < config.max_duration_s:
         sample = sensor.read()
         p, R = robot.sensor_pose()
@@ -322,7 +409,9 @@ def run_placement(
         state, twist = controller.step(state, sample.t, w_c, R, now, dt, nominal)
         f_raw = float(-(R @ sample.wrench_sensor[:3]) @ up_base)
         f_comp = float(-(R @ w_c[:3]) @ up_base)
-        f_filt = float(-(R @ state.wrench_filtered_sensor[:3]) @ up_base)
+        if np.isfinite(f_comp):
+            decision_state, f_dec = decision_filter.step(decision_state, [f_comp])
+        f_filt = float(f_dec[0]) if np.isfinite(f_comp) else math.nan
         velocity = float((p_prev - p) @ up_base) / dt if rows else 0.0
         p_prev = p
         rows.append(
@@ -333,7 +422,7 @@ def run_placement(
                 f_raw,
                 f_comp,
                 f_filt,
-                cell.surface_contact_force_N(),
+                cell.true_contact_force_N(),
             )
         )
         if state.stop_reason is not None:
@@ -341,11 +430,13 @@ def run_placement(
             outcome = state.stop_reason.value
             break
         if admittance:
-            if abs(f_filt) <= config.band_N:
+            if placed_at is not None:
+                if now - placed_at >= config.hold_s:  # kept under control while held
+                    break
+            elif abs(f_filt) <= config.band_N:
                 in_band_since = now if in_band_since is None else in_band_since
                 if now - in_band_since >= config.settle_time_s:
-                    outcome = "placed"
-                    break
+                    outcome, placed_at, decision_index = "placed", now, len(rows) - 1
             else:
                 in_band_since = None
         elif descent >= depth_target and not np.any(twist[:3]):
@@ -353,11 +444,12 @@ def run_placement(
             break
         robot.command_twist(twist)
         robot.wait_cycle()
-    decision_index = len(rows) - 1
+    if decision_index is None:
+        decision_index = len(rows) - 1
     robot.stop()
     placed = outcome in ("placed", "depth_reached")
-    if placed:  # hold still, then let go and lift
-        for _ in range(int(round(config.hold_s / dt))):
+    if outcome == "depth_reached":  # hold still, then let go and lift
+        for _ in range(round(config.hold_s / dt)):
             robot.wait_cycle()
             sample = sensor.read()
             p, R = robot.sensor_pose()
@@ -370,22 +462,25 @@ def run_placement(
                     float(-(R @ sample.wrench_sensor[:3]) @ up_base),
                     float(-(R @ w_c[:3]) @ up_base),
                     rows[-1][5],
-                    cell.surface_contact_force_N(),
+                    cell.true_contact_force_N(),
                 )
             )
+    hold_end = len(rows)
+    if placed:
         cell.release()
         p, R = robot.sensor_pose()
         robot.move_pose(p + config.retract_m * up_base, R, 0.3)
 
     data = np.array(rows, dtype=float).reshape(-1, len(COLUMNS))
     series = {name: data[:, i].copy() for i, name in enumerate(COLUMNS)}
-    metrics = _metrics(series, decision_index, outcome, placed, weight_true, config, dt)
+    metrics = _metrics(series, decision_index, hold_end, outcome, placed, weight_true, config, dt)
     return PlacementResult(config, series, metrics)
 
 
 def _metrics(
     s: dict[str, NDArray[np.float64]],
     decision: int,
+    hold_end: int,
     outcome: str,
     placed: bool,
     weight_N: float,
@@ -396,8 +491,8 @@ def _metrics(
     true_force = s["force_true_contact_N"][run]
     in_contact = np.flatnonzero(true_force > 0.05 * weight_N)
     contact = slice(int(in_contact[0]), decision + 1) if len(in_contact) else slice(0, 0)
-    hold = s["force_compensated_N"][decision + 1 :]
-    final_force = float(np.mean(hold)) if len(hold) else float(s["force_filtered_N"][decision])
+    hold = s["force_compensated_N"][decision + 1 : hold_end]
+    final_force = float(np.mean(hold)) if len(hold) > 10 else float(s["force_filtered_N"][decision])
     return {
         "placed": placed,
         "stop_reason": outcome,
