@@ -38,6 +38,14 @@ from __future__ import annotations
 
 from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmSpec, c4_like_arm
 from ftcomp.sim.cell import HOME_Q_RAD, SimCell
+from ftcomp.sim.collect import (
+    COLLECTION_POSITION_BASE_M,
+    PoseList,
+    StaticCollection,
+    collect_static_samples,
+    paper_poses,
+    read_pose_file,
+)
 from ftcomp.sim.ik import DifferentialIK, dls_joint_velocity, solve_pose
 from ftcomp.sim.scene import NAMES, SceneConfig, build_mjcf
 from ftcomp.sim.sensor import (
@@ -57,6 +65,7 @@ from ftcomp.sim.tool import (
 
 __all__ = [
     "ARM_JOINT_NAMES",
+    "COLLECTION_POSITION_BASE_M",
     "HOME_Q_RAD",
     "NAMES",
     "PAPER_FORCE_BIAS_N",
@@ -67,18 +76,23 @@ __all__ = [
     "DifferentialIK",
     "LoadSpec",
     "PAPER_TORQUE_BIAS_Nm",
+    "PoseList",
     "SceneConfig",
     "SensorSpec",
     "SimCell",
     "SimWrenchSensor",
     "SpongeSpec",
+    "StaticCollection",
     "SurfaceKind",
     "TableSpec",
     "ToolSpec",
     "build_mjcf",
     "c4_like_arm",
+    "collect_static_samples",
     "dls_joint_velocity",
+    "paper_poses",
     "paper_tool",
+    "read_pose_file",
     "solve_pose",
     "table4_loads",
 ]
