@@ -40,6 +40,8 @@ _DLS_DAMPING: Final = 1e-3
 _MAX_JOINT_SPEED: Final = 3.0
 _SURFACE_GEOMS: Final = ("floor", "table", "book", "sponge_top")
 
+#: Consecutive still cycles that make :meth:`SimCell.settle` call the cell at rest.
+_STILL_CYCLES: Final = 20
 _BADQACC: Final = int(mujoco.mjtWarning.mjWARN_BADQACC)
 
 CycleCallback = Callable[["SimCell"], None]
@@ -365,18 +367,21 @@ class SimCell:
     ) -> float:
         """Hold the command until the cell is still; returns the time it took [s].
 
+        Still: every degree of freedom slower than ``velocity_tol`` [rad/s or m/s] for
+        :data:`_STILL_CYCLES` cycles in a row (a body released at rest is not yet still).
+
         Raises:
             SimulationError: still moving after ``max_duration_s``.
         """
         self.stop()
         t0 = self.time()
         n = max(1, round(max_duration_s / self._period))
+        still = 0
         for _ in range(n):
-            if self.is_still(velocity_tol):
-                return self.time() - t0
             self._physics()
-        if self.is_still(velocity_tol):
-            return self.time() - t0
+            still = still + 1 if self.is_still(velocity_tol) else 0
+            if still >= _STILL_CYCLES:
+                return self.time() - t0
         raise SimulationError(
             f"{label or 'the cell'} did not come to rest within {max_duration_s} s "
             f"(max |qvel| = {float(np.max(np.abs(self._data.qvel))):.3g})"
