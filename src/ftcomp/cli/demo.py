@@ -142,11 +142,11 @@ def summary_table(metrics: dict[str, Any]) -> Table:
             f"peak press {_f(run.get('peak_press_N'))} N, "
             f"settle {_f(run.get('settle_time_s'), 2)} s",
         )
-    unc = place["admittance_uncompensated_sponge"]
+    unc, comp = place["admittance_uncompensated_sponge"], place["admittance_sponge"]
     table.add_row(
-        "without compensation",
-        "decision wrong",
-        f"placed {_f(unc.get('placed'))}",
-        str(unc.get("stop_reason", unc.get("outcome", ""))),
+        "without compensation (sponge)",
+        "decision wrong, too deep",
+        f"descent {_f(unc.get('descent_mm'), 2)} mm vs {_f(comp.get('descent_mm'), 2)} mm",
+        f"ended by {unc.get('stop_reason')}, peak press {_f(unc.get('peak_press_N'))} N",
     )
     return table
