@@ -38,7 +38,7 @@ from ftcomp.model import GravityModel
 from ftcomp.report.figures import plot_continuous_pose, plot_table3, plot_table4
 from ftcomp.report.html import Figure, Section, Table, write_report
 
-__all__ = ["DemoSettings", "MARKER_FILE", "prepare_output", "run_demo"]
+__all__ = ["MARKER_FILE", "DemoSettings", "prepare_output", "run_demo"]
 
 #: A file the demo leaves in its output folder, so a later run knows the folder is its own.
 MARKER_FILE = ".ftcomp-demo"
