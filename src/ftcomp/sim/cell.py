@@ -203,7 +203,8 @@ class SimCell:
             ParameterError: wrong shape or not finite.
         """
         tw = np.asarray(twist_base, dtype=float)
-        if tw.shape != (6,) or not np.isfinite(tw).all():
+        # The sum is NaN or infinite as soon as one component is (cheaper than isfinite().all()).
+        if tw.shape != (6,) or not math.isfinite(tw.sum()):
             raise ParameterError(f"twist_base must be 6 finite numbers, got {twist_base!r}")
         self._twist_world = self._R6_world_base @ tw
         self._twist_active = bool(tw.any())

@@ -190,6 +190,8 @@ class SimWrenchSensor:
         self._std = spec.noise_std_6
         self._step = spec.step_6 if spec.resolution_fraction_of_range > 0.0 else None
         self._range = spec.range_6
+        self._inv_range = 1.0 / spec.range_6
+        self._inv_step = 1.0 / self._step if self._step is not None else np.ones(6)
         self._overload = spec.overload_6
 
     @property
@@ -235,15 +237,19 @@ class SimWrenchSensor:
         if self._next >= len(self._block):
             self._block = self._rng.standard_normal((_NOISE_BLOCK, 6))
             self._next = 0
-        noise = self._block[self._next]
+        x = self._ideal()
+        x += self._bias
+        x += self._block[self._next] * self._std
         self._next += 1
-        loaded = self._ideal() + self._bias
-        if not self._overloaded and np.any(np.abs(loaded) > self._overload):
-            self._overloaded = True
-        reading = loaded + noise * self._std
+        # Fast path: within range (no saturation, so no overload either) in one reduction.
+        if np.abs(x * self._inv_range).max() > 1.0:
+            if not self._overloaded and np.any(np.abs(x) > self._overload):
+                self._overloaded = True
+            np.clip(x, -self._range, self._range, out=x)
         if self._step is not None:
-            reading = np.round(reading / self._step) * self._step
-        np.clip(reading, -self._range, self._range, out=reading)
+            x *= self._inv_step
+            np.rint(x, out=x)
+            x *= self._step
         self._last_tick = k
-        self._last = WrenchSample(k / self._spec.output_rate_Hz, reading)
+        self._last = WrenchSample(k / self._spec.output_rate_Hz, x)
         return self._last
