@@ -32,7 +32,7 @@ from ftcomp.experiments.placement import (
     write_placement_outputs,
 )
 from ftcomp.io.atomic import atomic_write_text
-from ftcomp.io.calibration_file import model_to_dict, save_calibration
+from ftcomp.io.calibration_file import calibration_to_dict, model_to_dict, save_calibration
 from ftcomp.io.samples import WRENCH_COLUMNS, write_samples, write_table
 from ftcomp.model import GravityModel
 from ftcomp.report.figures import plot_continuous_pose, plot_table3, plot_table4
@@ -151,9 +151,9 @@ def _calibration_section(
     joint = run.results["joint"]
     truth_errors = _truth_errors(run.truth, run.results)
     metrics = {
-        "paper_data": _calibration_metrics(paper_data),
+        "paper_data": calibration_to_dict(paper_data),
         "simulation_truth": model_to_dict(run.truth),
-        "simulation": {m: _calibration_metrics(r) for m, r in run.results.items()},
+        "simulation": {m: calibration_to_dict(r) for m, r in run.results.items()},
         "truth_error_in_standard_errors": truth_errors,
         "no_gripper": {
             "true_sensing_end_weight_N": run.bare_truth.weight_N,
@@ -203,22 +203,6 @@ def _fmt(value: Any) -> str:
     if isinstance(value, (float, int)):
         return f"{value:.4f}"
     return _vec(np.asarray(value))
-
-
-def _calibration_metrics(result: Calibration) -> dict[str, Any]:
-    force_rms, torque_rms = result.residual_rms
-    return {
-        **model_to_dict(result.model),
-        "std_errors": {
-            "tool_weight_N": result.std_errors.weight_N,
-            "center_of_gravity_m": result.std_errors.center_of_gravity_m.tolist(),
-            "force_bias_N": result.std_errors.force_bias_N.tolist(),
-            "torque_bias_Nm": result.std_errors.torque_bias_Nm.tolist(),
-        },
-        "residual_rms": {"force_N": force_rms, "torque_Nm": torque_rms},
-        "condition_number": result.condition_number,
-        "relative_error_mean_percent": result.relative_error_mean_percent.tolist(),
-    }
 
 
 def _truth_errors(
@@ -548,15 +532,13 @@ def _placement_section(
         "descent_mm",
         "max_velocity_mm_s",
     )
-    metrics: dict[str, Any] = {
-        name: {k: r.metrics.get(k) for k in r.metrics} for name, r in runs.items()
-    }
+    metrics: dict[str, Any] = {name: dict(r.metrics) for name, r in runs.items()}
     metrics["published"] = published
     rows = [
         [
             labels[name],
             *(_cell_text(runs[name].metrics.get(k)) for k in keys),
-            str(runs[name].metrics.get("stop_reason", runs[name].metrics.get("outcome", ""))),
+            str(runs[name].metrics.get("stop_reason", "")),
         ]
         for name in runs
     ]
