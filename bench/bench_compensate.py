@@ -13,7 +13,7 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ftcomp.compensation import GravityCompensator
+from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.model import GravityModel
 
 MODEL = GravityModel(

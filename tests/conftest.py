@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ftcomp.io.samples import Samples
 from ftcomp.model import GravityModel
+from ftcomp.samples import Samples
 
 PAPER_CSV = Path(str(resources.files("ftcomp") / "data" / "huang2020_table1_2.csv"))
 PUBLISHED_JSON = Path(str(resources.files("ftcomp") / "data" / "huang2020_published_results.json"))
@@ -53,3 +53,14 @@ def synthetic_samples(
 def rng(request: pytest.FixtureRequest) -> np.random.Generator:
     """A generator seeded from the test's name, so every test has its own fixed stream."""
     return np.random.default_rng(zlib.crc32(request.node.name.encode()))
+
+
+@pytest.fixture(scope="session")
+def identified_tool() -> GravityModel:
+    """The gripper identified on the simulated placement cell (tilted base, paper poses, joint
+    method): what every placement test compensates with. The truth only scores the runs."""
+    from ftcomp.sim.placement_cell import SimPlacementCell
+
+    cell = SimPlacementCell("sponge", 0.5, seed=99, identify_samples_per_pose=200)
+    assert cell.identified is not None
+    return cell.identified.model

@@ -10,6 +10,7 @@ from __future__ import annotations
 __all__ = [
     "CalibrationFileError",
     "FtcompError",
+    "HardwareError",
     "IdentificationError",
     "InputFileError",
     "OrientationError",
@@ -41,6 +42,10 @@ class OrientationError(FtcompError, ValueError):
 
 class IdentificationError(FtcompError):
     """The calibration parameters cannot be identified from the given poses."""
+
+
+class HardwareError(FtcompError):
+    """A robot or sensor failed: unreachable, silent, disconnected, or reporting a fault."""
 
 
 class SimulationError(FtcompError):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ftcomp.interfaces import WrenchSample
+from ftcomp.hardware.protocols import PoseSample, WrenchSample
 from ftcomp.model import GravityModel
 
 R_DOWN = np.diag([1.0, -1.0, -1.0])
@@ -52,14 +52,24 @@ class FakeCell:
     def sensor(self) -> FakeCell:
         return self
 
+    def __enter__(self) -> FakeCell:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
     def time(self) -> float:
         return self.t
 
-    def sensor_pose(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        return np.array([0.4, 0.0, self.z]), R_DOWN
+    def now_ns(self) -> int:
+        return round(self.t * 1e9)
 
-    def move_joints(self, q_rad: NDArray[np.float64], duration_s: float) -> None:
-        raise NotImplementedError
+    def pose(self) -> PoseSample:
+        return PoseSample(self.now_ns(), np.array([0.4, 0.0, self.z]), R_DOWN)
+
+    def settle(self, max_duration_s: float) -> float:
+        self.v = 0.0
+        return 0.0
 
     def move_pose(self, p: NDArray[np.float64], R: NDArray[np.float64], duration_s: float) -> None:
         self.z, self.v, self.v_cmd = float(p[2]), 0.0, 0.0
@@ -90,7 +100,10 @@ class FakeCell:
             else R_DOWN.T @ load
         )
         w = PAPER_MODEL.predict(R_DOWN) + np.concatenate([f_sensor, np.zeros(3)])
-        return WrenchSample(self.t, w)
+        return WrenchSample(self.now_ns(), w)
+
+    def read_new(self) -> list[WrenchSample]:
+        return [self.read()]
 
     # Cell
     def load_clearance_m(self) -> float:

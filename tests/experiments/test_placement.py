@@ -9,14 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ftcomp.experiments.placement import (
-    DEFAULT_GAINS,
-    FaultySensor,
-    PlacementConfig,
-    SimPlacementCell,
-    run_placement,
-    sweep_gains,
-)
+from ftcomp.experiments.placement import run_placement, sweep_gains
+from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig
+from ftcomp.hardware.faults import FaultySensor
+from ftcomp.model import GravityModel
+from ftcomp.sim.placement_cell import SimPlacementCell
 
 sys.path.insert(0, str(Path(__file__).parent))
 from fake_cell import PAPER_MODEL, FakeCell
@@ -29,26 +26,30 @@ def _config(surface: str, control: str = "admittance", **kw: object) -> Placemen
 
 @pytest.mark.parametrize("surface", ["book", "sponge"])
 def test_admittance_with_compensation_places_500_g_gently(surface: str) -> None:
-    cell = SimPlacementCell(surface, 0.5, seed=1)
-    m = run_placement(cell, cell.tool_model, _config(surface)).metrics
+    # The chain end to end: the tool identified on this very cell, then the placement with it.
+    cell = SimPlacementCell(surface, 0.5, seed=1, identify_samples_per_pose=200)
+    assert cell.identified is not None
+    m = run_placement(cell, cell.identified.model, _config(surface)).metrics
     assert m["placed"] and m["stop_reason"] == "placed"
     assert abs(m["final_force_N"]) <= 0.05
     assert m["peak_press_N"] <= 0.3
 
 
-def test_position_only_presses_the_load_into_the_book() -> None:
+def test_position_only_presses_the_load_into_the_book(identified_tool: GravityModel) -> None:
     cell = SimPlacementCell("book", 0.5, seed=2)
-    m = run_placement(cell, cell.tool_model, _config("book", "position")).metrics
+    m = run_placement(cell, identified_tool, _config("book", "position")).metrics
     assert m["peak_press_N"] >= 1.0  # the paper's failure mode (Fig. 6)
 
 
 @pytest.mark.parametrize("surface", ["book", "sponge"])
-def test_without_compensation_the_decision_goes_wrong_and_the_run_ends_safely(surface: str) -> None:
+def test_without_compensation_the_decision_goes_wrong_and_the_run_ends_safely(
+    surface: str, identified_tool: GravityModel
+) -> None:
     cell = SimPlacementCell(surface, 0.5, seed=3)
     config = _config(surface, compensation=False)
-    m = run_placement(cell, cell.tool_model, config).metrics
+    m = run_placement(cell, identified_tool, config).metrics
     right = run_placement(
-        SimPlacementCell(surface, 0.5, seed=3), cell.tool_model, _config(surface)
+        SimPlacementCell(surface, 0.5, seed=3), identified_tool, _config(surface)
     ).metrics
     went_wrong = (
         not m["placed"] or m["descent_mm"] > right["descent_mm"] + 0.01 or m["peak_press_N"] > 1.0
@@ -59,11 +60,13 @@ def test_without_compensation_the_decision_goes_wrong_and_the_run_ends_safely(su
     assert m["peak_press_N"] < 2 * config.max_force_N  # ended by the envelope, not by damage
 
 
-def test_larger_gains_place_faster_with_more_ripple_on_the_sponge() -> None:
+def test_larger_gains_place_faster_with_more_ripple_on_the_sponge(
+    identified_tool: GravityModel,
+) -> None:
     base = replace(_config("sponge"), k1_m_per_N=1e-4, k2_m_per_s_N=1e-3)
     runs = sweep_gains(
         lambda: SimPlacementCell("sponge", 0.5, seed=4),
-        SimPlacementCell("sponge", 0.5, seed=4).tool_model,
+        identified_tool,
         base,
         k1_values_m_per_N=(0.5e-4, 1e-4, 2e-4),
         k2_values_m_per_s_N=(0.5e-3, 1e-3, 2e-3),
@@ -82,14 +85,16 @@ def test_larger_gains_place_faster_with_more_ripple_on_the_sponge() -> None:
 
 
 @pytest.mark.parametrize("fault", ["nan", "repeat", "spike", "stop"])
-def test_sensor_faults_stop_motion_within_one_period_and_are_reported(fault: str) -> None:
+def test_sensor_faults_stop_motion_within_one_period_and_are_reported(
+    fault: str, identified_tool: GravityModel
+) -> None:
     cell = SimPlacementCell("sponge", 0.5, seed=5)
     sensor = FaultySensor(cell.sensor, fault, t_fault_s=np.inf)  # type: ignore[arg-type]
     # Arm the fault 0.3 s into the descent (robot clock).
     config = replace(_config("sponge"), max_duration_s=0.6)
     start = cell.robot.time()
     sensor.t_fault_s = start + 0.3 + 0.5  # setup move (0.3 s) + settle (0.1 s) + descent
-    result = run_placement(cell, cell.tool_model, config, sensor=sensor)
+    result = run_placement(cell, identified_tool, config, sensor=sensor)
     expected = {
         "nan": "non_finite_sample",
         "repeat": "repeated_sample",

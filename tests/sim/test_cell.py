@@ -9,7 +9,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import ParameterError, SimulationError, UnreachablePoseError
-from ftcomp.interfaces import Robot, WrenchSensor
+from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.sim.cell import SimCell
 from ftcomp.sim.scene import SceneConfig
 from ftcomp.sim.sensor import SensorSpec

@@ -10,8 +10,9 @@ import pytest
 
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
+from ftcomp.paper import TABLE4_LOAD_WEIGHTS_N
 from ftcomp.sim.scene import NAMES, SceneConfig, build_mjcf
-from ftcomp.sim.tool import TABLE4_LOAD_WEIGHTS_N, LoadSpec, table4_loads
+from ftcomp.sim.tool import LoadSpec, table4_loads
 
 
 def _model(config: SceneConfig) -> mujoco.MjModel:

@@ -1,47 +1,91 @@
 """The ``ftcomp`` command: a thin layer that parses, calls the library and prints.
 
-Each command lives in its own module with a ``register(subparsers)`` function that adds its
-parser and sets ``handler``; a handler returns the exit code. ``FtcompError`` becomes one line
-``error: ...`` on stderr and exit code 2.
+Each command lives in its own module with a ``register(parser)`` function that adds its
+arguments and sets ``handler``; a handler returns the exit code. Only the module of the command
+being run is imported (``ftcomp --help`` loads none of them, nor numpy), so the command starts
+fast. ``FtcompError`` becomes one line ``error: ...`` on stderr and exit code 2.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 from collections.abc import Sequence
 
 from ftcomp import __version__
-from ftcomp.cli import calibrate, collect, compensate, demo, place
-from ftcomp.errors import FtcompError
 
-__all__ = ["main"]
+__all__ = ["COMMANDS", "SIM_COMMANDS", "build_parser", "main"]
 
 EXIT_BAD_INPUT = 2
 
+#: Top-level commands: name -> (module, one-line help).
+COMMANDS: dict[str, tuple[str, str]] = {
+    "calibrate": (
+        "ftcomp.cli.calibrate",
+        "identify sensor bias, tool weight and centre of gravity, and base tilt",
+    ),
+    "compensate": ("ftcomp.cli.compensate", "remove bias and tool gravity from every reading"),
+    "demo": (
+        "ftcomp.cli.demo",
+        "run every experiment of the paper on the simulated cell and write a report",
+    ),
+}
+#: ``ftcomp sim`` commands: name -> (module, one-line help).
+SIM_COMMANDS: dict[str, tuple[str, str]] = {
+    "collect": (
+        "ftcomp.cli.collect",
+        "record static calibration readings in the simulated cell (record on sim://)",
+    ),
+    "place": (
+        "ftcomp.cli.place",
+        "place a grasped load on a sponge or a book (position-only or admittance)",
+    ),
+}
 
-def build_parser() -> argparse.ArgumentParser:
-    """The full argument parser, with every command registered."""
+
+def _chosen(argv: Sequence[str], names: Sequence[str]) -> str | None:
+    """The first argument that names a command (None for e.g. ``--help`` alone)."""
+    return next((a for a in argv if a in names), None)
+
+
+def _add(
+    commands: argparse._SubParsersAction[argparse.ArgumentParser],
+    table: dict[str, tuple[str, str]],
+    chosen: str | None,
+) -> None:
+    """A parser per command; only the chosen command's module is imported to fill its own."""
+    for name, (module, help_text) in table.items():
+        parser = commands.add_parser(name, help=help_text, description=help_text)
+        if name == chosen:
+            importlib.import_module(module).register(parser)
+
+
+def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
+    """The argument parser, with the command named in ``argv`` fully registered."""
     parser = argparse.ArgumentParser(
         prog="ftcomp",
         description="F/T sensor calibration, gravity compensation and compliant control.",
     )
     parser.add_argument("--version", action="version", version=f"ftcomp {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    calibrate.register(commands)
-    compensate.register(commands)
-    demo.register(commands)
+    chosen = _chosen(argv, [*COMMANDS, "sim"])
+    _add(commands, COMMANDS, chosen)
     sim = commands.add_parser("sim", help="run the simulated MuJoCo robot cell")
     sim_commands = sim.add_subparsers(dest="sim_command", metavar="SIM_COMMAND", required=True)
-    collect.register(sim_commands)
-    place.register(sim_commands)
+    sim_chosen = None
+    if chosen == "sim":
+        sim_chosen = _chosen(argv[list(argv).index("sim") + 1 :], list(SIM_COMMANDS))
+    _add(sim_commands, SIM_COMMANDS, sim_chosen)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ftcomp`` console script; returns the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser(args_list).parse_args(args_list)
+    from ftcomp.errors import FtcompError
+
     try:
         code: int = args.handler(args)
     except FtcompError as exc:

@@ -11,22 +11,21 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from ftcomp.calibration import Calibration, calibrate
+from ftcomp.calibration.identify import Calibration, calibrate
 from ftcomp.cli.common import parse_range, print_warnings
 from ftcomp.io.atomic import check_writable
-from ftcomp.io.calibration_file import calibration_to_dict, save_calibration
-from ftcomp.io.samples import WRENCH_COLUMNS, read_samples
+from ftcomp.io.calibration_json import calibration_to_dict, save_calibration
+from ftcomp.io.samples_csv import read_samples
+from ftcomp.samples import WRENCH_COLUMNS
 
 __all__ = ["console", "register", "render_calibration"]
 
 
-def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Add the ``calibrate`` command."""
-    parser = commands.add_parser(
-        "calibrate",
-        help="identify sensor bias, tool weight and centre of gravity, and base tilt",
-        description="Identify F/T sensor bias, tool weight and centre of gravity, and the "
-        "robot base's tilt from readings at several poses (sample CSV).",
+def register(parser: argparse.ArgumentParser) -> None:
+    """Add the ``calibrate`` command's arguments to its parser."""
+    parser.description = (
+        "Identify F/T sensor bias, tool weight and centre of gravity, and the "
+        "robot base's tilt from readings at several poses (sample CSV)."
     )
     parser.add_argument("samples", metavar="SAMPLES.csv", help="sample CSV (see docs/files.md)")
     parser.add_argument("-o", "--output", required=True, metavar="CALIBRATION.json")

@@ -12,33 +12,24 @@ import math
 from pathlib import Path
 from typing import Any
 
+from scipy.spatial.transform import Rotation
+
+from ftcomp import paper
 from ftcomp.errors import ParameterError
 from ftcomp.frames import ENCODING_COLUMNS
 from ftcomp.io.atomic import atomic_write_text, check_writable
-from ftcomp.io.calibration_file import model_to_dict
-from ftcomp.io.samples import write_samples
-from ftcomp.sim.cell import SimCell
-from ftcomp.sim.collect import collect_static_samples, paper_poses, read_pose_file
-from ftcomp.sim.scene import SceneConfig
-from ftcomp.sim.sensor import SensorSpec
-from ftcomp.sim.tool import LoadSpec
+from ftcomp.io.calibration_json import model_to_dict
+from ftcomp.io.samples_csv import write_samples
 
-__all__ = ["PAPER_TILT_DEG", "register", "run"]
-
-#: The paper's identified base tilt (U, V) [deg]: the default mounting of the simulated arm.
-PAPER_TILT_DEG = (-0.204, -0.129)
-#: Largest load the simulated arm takes [kg] (the C4-A901S is rated for 4 kg).
-_MAX_LOAD_KG = 4.0
+__all__ = ["register", "robot_uri", "run"]
 
 
-def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Add the ``collect`` command to the ``sim`` group."""
-    parser = commands.add_parser(
-        "collect",
-        help="record static calibration readings in the simulated cell",
-        description="Drive the simulated arm to each pose, wait until it is still, record the "
+def register(parser: argparse.ArgumentParser) -> None:
+    """Add the ``collect`` command's arguments to its parser."""
+    parser.description = (
+        "Drive the simulated arm to each pose, wait until it is still, record the "
         "F/T sensor's readings (sample CSV) and write the true parameters (calibration-file "
-        "keys).",
+        "keys)."
     )
     parser.add_argument(
         "--poses",
@@ -53,7 +44,7 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
         "--tilt-deg",
         type=float,
         nargs=2,
-        default=PAPER_TILT_DEG,
+        default=paper.TILT_DEG,
         metavar=("U", "V"),
         help="base mounting tilt [deg] (default: the paper's -0.204 -0.129)",
     )
@@ -74,11 +65,15 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
 
 
 def _check_args(args: argparse.Namespace) -> None:
+    from ftcomp.sim.backend import MAX_LOAD_KG
+
     if args.samples_per_pose < 1:
         raise ParameterError(f"--samples-per-pose must be >= 1, got {args.samples_per_pose}")
+    if args.seed < 0:
+        raise ParameterError(f"--seed must be >= 0, got {args.seed}")
     if args.load_kg is not None:
-        if not math.isfinite(args.load_kg) or not 0.0 < args.load_kg <= _MAX_LOAD_KG:
-            raise ParameterError(f"--load-kg must be in (0, {_MAX_LOAD_KG}], got {args.load_kg}")
+        if not math.isfinite(args.load_kg) or not 0.0 < args.load_kg <= MAX_LOAD_KG:
+            raise ParameterError(f"--load-kg must be in (0, {MAX_LOAD_KG}], got {args.load_kg}")
         if args.no_gripper:
             raise ParameterError("--load-kg needs the gripper: drop --no-gripper")
     for name, value in zip(("U", "V"), args.tilt_deg, strict=True):
@@ -88,47 +83,60 @@ def _check_args(args: argparse.Namespace) -> None:
         raise ParameterError(f"-o and --truth are the same file: {args.output}")
 
 
+def robot_uri(args: argparse.Namespace) -> str:
+    """The ``sim://`` robot URI these options describe."""
+    options = [f"tilt_deg={args.tilt_deg[0]!r},{args.tilt_deg[1]!r}", f"seed={args.seed}"]
+    if args.no_gripper:
+        options.append("gripper=0")
+    if args.load_kg is not None:
+        options.append(f"load_kg={args.load_kg!r}&grasp=1")
+    return "sim://?" + "&".join(options)
+
+
 def run(args: argparse.Namespace) -> int:
-    """Build the cell, collect, write the samples and the truth."""
+    """``record`` on ``sim://``: open the cell by URI, record through the protocols, write the
+    samples and the truth."""
+    from ftcomp.hardware.registry import open_robot, open_sensor
+    from ftcomp.io.poses_csv import read_pose_file
+    from ftcomp.paper import paper_poses
+    from ftcomp.sim.collect import record_with_truth
+
     _check_args(args)
     samples_path = check_writable(args.output, overwrite=args.force)
     truth_path = check_writable(args.truth, overwrite=args.force)
     poses = paper_poses() if args.poses == "paper" else read_pose_file(args.poses)
-    load = LoadSpec(args.load_kg) if args.load_kg is not None else None
-    config = SceneConfig(
-        tilt_U_rad=math.radians(args.tilt_deg[0]),
-        tilt_V_rad=math.radians(args.tilt_deg[1]),
-        gripper=not args.no_gripper,
-        load=load,
-    )
-    spec = SensorSpec()
-    cell = SimCell(config, spec, seed=args.seed)
-    if load is not None:
-        cell.grasp()
-    data = collect_static_samples(cell, poses, args.samples_per_pose)
+    uri = robot_uri(args)
+    with open_robot(uri) as robot, open_sensor("sim://", robot):
+        from ftcomp.sim.cell import SimCell
+
+        assert isinstance(robot, SimCell)  # sim:// opens the MuJoCo cell
+        samples, truth_model = record_with_truth(robot, poses, args.samples_per_pose)
+        spec = robot.sensor.spec
+        sensing_end_N = robot.config.tool.sensing_end_weight_N
     write_samples(
         samples_path,
-        data.wrench_sensor,
-        data.rotations,
+        samples.wrench_sensor,
+        Rotation.from_matrix(samples.R_base_sensor),
         encoding=args.encoding,
-        pose=data.pose_ids,
-        t=data.t,
+        pose=samples.pose,
+        t=samples.t,
     )
-    truth: dict[str, Any] = model_to_dict(data.truth)
+    truth: dict[str, Any] = model_to_dict(truth_model)
     truth["simulation"] = {
+        "robot": uri,
         "poses": poses.source,
         "pose_ids": list(poses.ids),
         "samples_per_pose": args.samples_per_pose,
         "seed": args.seed,
         "gripper": not args.no_gripper,
         "load_kg": args.load_kg,
-        "sensing_end_weight_N": config.tool.sensing_end_weight_N,
+        "sensing_end_weight_N": sensing_end_N,
         "sensor_noise_std": [spec.force_noise_std_N, spec.torque_noise_std_Nm],
         "sensor_resolution_fraction_of_range": spec.resolution_fraction_of_range,
     }
     atomic_write_text(truth_path, json.dumps(truth, indent=2, allow_nan=False) + "\n")
     print(
-        f"wrote {len(data.t)} readings at {len(poses)} poses to {samples_path}; "
+        f"wrote {len(samples)} readings at {len(poses)} poses to {samples_path}; "
         f"truth to {truth_path}"
     )
     return 0

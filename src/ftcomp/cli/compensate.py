@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 
 from ftcomp.cli.common import parse_range, print_warnings
-from ftcomp.compensation import GravityCompensator
+from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.errors import ParameterError
 from ftcomp.io.atomic import check_writable
-from ftcomp.io.calibration_file import load_calibration
-from ftcomp.io.samples import read_samples, write_table
+from ftcomp.io.calibration_json import load_calibration
+from ftcomp.io.samples_csv import read_samples, write_table
 
 __all__ = ["EXTRA_COLUMNS", "register"]
 
@@ -21,13 +21,11 @@ __all__ = ["EXTRA_COLUMNS", "register"]
 EXTRA_COLUMNS = ("fx_ext", "fy_ext", "fz_ext", "tx_ext", "ty_ext", "tz_ext", "load_weight_N")
 
 
-def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Add the ``compensate`` command."""
-    parser = commands.add_parser(
-        "compensate",
-        help="remove bias and tool gravity from every reading",
-        description="Remove sensor bias and tool gravity from every reading of a sample CSV; "
-        "writes the input columns plus " + ",".join(EXTRA_COLUMNS) + ".",
+def register(parser: argparse.ArgumentParser) -> None:
+    """Add the ``compensate`` command's arguments to its parser."""
+    parser.description = (
+        "Remove sensor bias and tool gravity from every reading of a sample CSV; "
+        "writes the input columns plus " + ",".join(EXTRA_COLUMNS) + "."
     )
     parser.add_argument("samples", metavar="SAMPLES.csv")
     parser.add_argument("-c", "--calibration", required=True, metavar="CALIBRATION.json")

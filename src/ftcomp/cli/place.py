@@ -1,23 +1,39 @@
-"""``ftcomp sim place``: set a grasped load down on the simulated sponge or book (paper 2.2.2)."""
+"""``ftcomp sim place``: set a grasped load down on the simulated sponge or book (paper 2.2.2).
+
+The compensation uses an *identified* calibration: the one given with ``-c``, or else one
+identified on the same simulated cell first (the empty gripper at the paper's nine poses).
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
 
 from ftcomp.errors import ParameterError
 
 __all__ = ["register"]
 
+#: Readings per pose when ``sim place`` identifies the tool itself.
+IDENTIFY_SAMPLES_PER_POSE = 200
 
-def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """Add the ``place`` command to the ``sim`` group."""
-    p = commands.add_parser(
-        "place",
-        help="place a grasped load on a sponge or a book (position-only or admittance)",
-        description="Writes timeseries.csv, metrics.json and placement.png into --out.",
+
+def register(p: argparse.ArgumentParser) -> None:
+    """Add the ``place`` command's arguments to its parser."""
+    p.description = (
+        "Set a grasped load down on the simulated sponge or book with the paper's combined "
+        "admittance law (or position-only control). Writes timeseries.csv, metrics.json, "
+        "placement.png and the calibration used into --out."
     )
     p.add_argument("--surface", choices=("sponge", "book"), required=True)
     p.add_argument("--control", choices=("position", "admittance"), required=True)
+    p.add_argument(
+        "-c",
+        "--calibration",
+        metavar="CALIBRATION.json",
+        help="the calibration to compensate with (default: identify the tool on the same "
+        f"simulated cell first, {IDENTIFY_SAMPLES_PER_POSE} readings at each of the paper's "
+        "9 poses)",
+    )
     p.add_argument(
         "--no-compensation", action="store_true", help="control on raw readings (Fig. 7)"
     )
@@ -25,20 +41,17 @@ def register(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> N
     p.add_argument(
         "--k2", type=float, metavar="MM_PER_S_PER_N", help="k23 [mm/(s*N)] (default per surface)"
     )
-    p.add_argument("--load-kg", type=float, default=0.5)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--load-kg", type=float, default=0.5, help="the load's mass [kg] (0.5)")
+    p.add_argument("--seed", type=int, default=0, help="sensor-noise seed (0)")
     p.add_argument("--out", required=True, metavar="DIR")
     p.set_defaults(handler=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ftcomp.experiments.placement import (
-        DEFAULT_GAINS,
-        PlacementConfig,
-        SimPlacementCell,
-        run_placement,
-        write_placement_outputs,
-    )
+    from ftcomp.experiments.placement import run_placement, write_placement_outputs
+    from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig
+    from ftcomp.io.calibration_json import load_calibration, save_calibration
+    from ftcomp.sim.placement_cell import SimPlacementCell
 
     k1_default, k2_default = DEFAULT_GAINS[args.surface]
     k1_m = k1_default if args.k1 is None else args.k1 * 1e-3
@@ -46,18 +59,35 @@ def _run(args: argparse.Namespace) -> int:
     for name, value in (("--k1", k1_m), ("--k2", k2_m)):
         if not value >= 0.0:
             raise ParameterError(f"{name} must be >= 0, got {value * 1e3:g}")
+    if args.seed < 0:
+        raise ParameterError(f"--seed must be >= 0, got {args.seed}")
     config = PlacementConfig(
         args.control,
         compensation=not args.no_compensation,
         k1_m_per_N=k1_m,
         k2_m_per_s_N=k2_m,
     )
-    cell = SimPlacementCell(args.surface, args.load_kg, seed=args.seed)
-    result = run_placement(cell, cell.tool_model, config)
+    given = load_calibration(args.calibration) if args.calibration is not None else None
+    cell = SimPlacementCell(
+        args.surface,
+        args.load_kg,
+        seed=args.seed,
+        identify_samples_per_pose=None if given is not None else IDENTIFY_SAMPLES_PER_POSE,
+    )
+    calibration = given if given is not None else cell.identified
+    assert calibration is not None  # identified on the cell when none was given
+    model = calibration.model
+    source = args.calibration if given is not None else "identified on this cell"
+    print(
+        f"calibration ({source}): G {model.weight_N:.4f} N, "
+        f"U {math.degrees(model.tilt_U_rad):+.3f} deg, V {math.degrees(model.tilt_V_rad):+.3f} deg"
+    )
+    result = run_placement(cell, model, config)
     title = f"{args.control} on {args.surface}" + (
         ", no compensation" if args.no_compensation else ""
     )
     paths = write_placement_outputs(result, args.out, title=title)
+    save_calibration(paths["csv"].parent / "calibration_used.json", calibration)
     m = result.metrics
     print(
         f"{title}: {m['stop_reason']}, final force {m['final_force_N']:+.3f} N, "

@@ -6,30 +6,29 @@
   (Fig. 5): measured wrench, compensation value and error over time.
 - :func:`run_load_weighing`: the six loads of Table 4 weighed through compensation (Eq. 23).
 
-Each returns a frozen dataclass of numbers and arrays; :mod:`ftcomp.demo` turns them into files,
-figures and the report.
+Each returns a frozen dataclass of numbers and arrays; :mod:`ftcomp.experiments.demo` turns them
+into files, figures and the report.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from importlib import resources
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration import Calibration, calibrate, pose_means
-from ftcomp.compensation import GravityCompensator
-from ftcomp.estimators import Method
+from ftcomp.calibration.identify import Calibration, calibrate, pose_means
+from ftcomp.calibration.methods import Method
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.compensation.load import estimate_load, load_weight_N
 from ftcomp.frames import encode_orientation, rotation_from_encoding
-from ftcomp.io.samples import Samples, read_samples
 from ftcomp.model import GravityModel
+from ftcomp.paper import paper_poses
+from ftcomp.samples import Samples
 from ftcomp.sim.cell import SimCell
-from ftcomp.sim.collect import collect_static_samples, paper_poses
+from ftcomp.sim.collect import record_with_truth
 from ftcomp.sim.scene import SceneConfig
 from ftcomp.sim.sensor import SensorSpec
 from ftcomp.sim.tool import LoadSpec, table4_loads
@@ -39,7 +38,6 @@ __all__ = [
     "ContinuousPoseRun",
     "LoadWeighingRun",
     "collect_paper_poses",
-    "published_results",
     "run_calibration",
     "run_continuous_pose",
     "run_load_weighing",
@@ -52,33 +50,9 @@ def _quiet(_: str) -> None:
     """A progress callback that says nothing."""
 
 
-def published_results() -> dict[str, Any]:
-    """The paper's published numbers (``huang2020_published_results.json``, shipped)."""
-    text = (resources.files("ftcomp") / "data" / "huang2020_published_results.json").read_text()
-    data: dict[str, Any] = json.loads(text)
-    return data
-
-
-def paper_samples() -> Samples:
-    """The paper's Tables 1-2 (shipped with the package)."""
-    path = resources.files("ftcomp") / "data" / "huang2020_table1_2.csv"
-    with resources.as_file(path) as csv_path:
-        return read_samples(csv_path)
-
-
 def collect_paper_poses(cell: SimCell, samples_per_pose: int) -> tuple[Samples, GravityModel]:
-    """Readings at the 9 Table-1 poses (:func:`ftcomp.sim.collect.collect_static_samples`)
-    as :class:`~ftcomp.io.samples.Samples`, with the simulated truth."""
-    collection = collect_static_samples(cell, paper_poses(), samples_per_pose, move_duration_s=0.6)
-    samples = Samples(
-        wrench_sensor=collection.wrench_sensor,
-        R_base_sensor=collection.rotations.as_matrix(),
-        encoding="paper_euler",
-        pose=np.array(collection.pose_ids),
-        t=collection.t,
-        source="simulated cell",
-    )
-    return samples, collection.truth
+    """Readings at the 9 Table-1 poses through the hardware protocols, with the simulated truth."""
+    return record_with_truth(cell, paper_poses(), samples_per_pose, move_duration_s=0.6)
 
 
 @dataclass(frozen=True)
@@ -200,9 +174,9 @@ def run_continuous_pose(
 
     def record(c: SimCell) -> None:
         sample = c.sensor.read()
-        t.append(sample.t)
+        t.append(sample.t_s)
         measured.append(sample.wrench_sensor)
-        Rs.append(c.sensor_pose()[1])
+        Rs.append(c.pose().R_base_tcp)  # the simulated TCP is the sensor frame
 
     record(cell)
     cell.move_pose(p_base, R_to, duration_s, on_cycle=record, label="end of the continuous change")
@@ -257,8 +231,8 @@ def run_load_weighing(
         # Average each pose's readings first, as the paper does: |F'| of single noisy readings
         # is biased upward by about 3 sigma^2 / (2 G') (2 % for the 1 N load).
         _, R_pose, mean_pose, _, _ = pose_means(samples)
-        weights = compensator.load_weight_N(mean_pose, R_pose)
-        estimate = compensator.estimate_load(mean_pose, R_pose)
+        weights = load_weight_N(compensator, mean_pose, R_pose)
+        estimate = estimate_load(compensator, mean_pose, R_pose)
         true_w.append(load.weight_N)
         computed.append(float(np.mean(weights)))
         mass.append(estimate.mass_kg)

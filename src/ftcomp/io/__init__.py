@@ -1,0 +1,1 @@
+"""Files: sample and pose CSVs, the calibration JSON, time series, atomic writes."""

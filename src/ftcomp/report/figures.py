@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import matplotlib
 
@@ -12,7 +13,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["plot_continuous_pose", "plot_table3", "plot_table4"]
+if TYPE_CHECKING:
+    from ftcomp.experiments.placement import PlacementResult
+
+__all__ = ["plot_continuous_pose", "plot_placement", "plot_table3", "plot_table4"]
 
 _AXES = ("fx [N]", "fy [N]", "fz [N]", "tx [N·m]", "ty [N·m]", "tz [N·m]")
 
@@ -107,3 +111,50 @@ def plot_table4(
     ax2.legend(fontsize=8)
     fig.suptitle("Table 4: weighing grasped loads through gravity compensation")
     _save(fig, path)
+
+
+def plot_placement(
+    results: Sequence[PlacementResult],
+    path: str | os.PathLike[str],
+    *,
+    labels: Sequence[str] | None = None,
+    title: str = "",
+) -> None:
+    """Force, displacement and velocity over time (the paper's Fig. 6/7), one line per run."""
+    fig, axes = plt.subplots(3, 1, figsize=(7, 7.5), sharex=True)
+    for i, result in enumerate(results):
+        s = result.timeseries
+        label = labels[i] if labels is not None else None
+        line = axes[0].plot(s["t_s"], s["force_filtered_N"], label=label)[0]
+        if len(results) == 1:
+            axes[0].plot(
+                s["t_s"],
+                s["force_compensated_N"],
+                lw=0.4,
+                alpha=0.4,
+                color=line.get_color(),
+                label="compensated (raw samples)",
+            )
+            axes[0].plot(
+                s["t_s"],
+                s["force_true_contact_N"] - result.metrics["load_weight_N"],
+                "--",
+                lw=1,
+                label="true press (contact - weight)",
+            )
+        axes[1].plot(s["t_s"], s["displacement_mm"], color=line.get_color())
+        axes[2].plot(s["t_s"], s["velocity_mm_s"], color=line.get_color())
+    band = results[0].config.band_N if results else 0.05
+    axes[0].axhspan(-band, band, color="green", alpha=0.15, label=f"±{band:g} N band")
+    axes[0].set_ylabel("force along gravity [N]")
+    axes[1].set_ylabel("displacement [mm]")
+    axes[2].set_ylabel("velocity [mm/s]")
+    axes[2].set_xlabel("time [s]")
+    axes[0].legend(fontsize=7)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)

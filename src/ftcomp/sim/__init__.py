@@ -1,9 +1,9 @@
 """The simulated robot cell on MuJoCo: a six-axis arm, a wrist F/T sensor, a gripper, loads,
 and a table with a sponge pad or a book.
 
-:class:`SimCell` implements :class:`ftcomp.interfaces.Robot`; ``cell.sensor`` implements
-:class:`ftcomp.interfaces.WrenchSensor`. The MuJoCo model is built in code
-(:func:`build_mjcf`); nothing is downloaded.
+:class:`SimCell` implements :class:`ftcomp.hardware.protocols.Robot`; ``cell.sensor`` implements
+:class:`ftcomp.hardware.protocols.WrenchSensor`; ``sim://`` URIs open them (:mod:`.backend`).
+The MuJoCo model is built in code (:func:`build_mjcf`); nothing is downloaded.
 
 A placement run, as the admittance experiment drives it (1 kHz)::
 
@@ -18,81 +18,60 @@ A placement run, as the admittance experiment drives it (1 kHz)::
     cell.grasp()                               # the load is now in the gripper (weld on)
     cell.settle()
     while cell.time() < 5.0:
-        sample = cell.sensor.read()            # WrenchSample: t [s], wrench_sensor (6,)
-        p, R = cell.sensor_pose()              # base frame
+        sample = cell.sensor.read()            # WrenchSample: t_ns [ns], wrench_sensor (6,)
+        pose = cell.pose()                     # PoseSample: the sensor frame in the base frame
         cell.command_twist(np.array([0, 0, -0.005, 0, 0, 0]))  # base frame [m/s, rad/s]
         cell.wait_cycle()                      # 1 ms of physics
         contact_N = cell.true_contact_force_N()  # what the pad pushes up on the load
     cell.stop()
     cell.release()
 
-Static calibration data at the paper's nine poses (Table 1)::
+Static calibration data at the paper's nine poses (Table 1), recorded through the hardware
+protocols as on a real arm, with the truth behind them::
 
-    from ftcomp.sim import collect_static_samples, paper_poses
+    from ftcomp.paper import paper_poses
+    from ftcomp.sim import record_with_truth
     cell = SimCell(SceneConfig(), seed=0)
-    data = collect_static_samples(cell, paper_poses(), samples_per_pose=500)
-    data.wrench_sensor, data.rotations, data.pose, data.t, data.truth  # truth: GravityModel
+    samples, truth = record_with_truth(cell, paper_poses(), samples_per_pose=500)
+    samples.wrench_sensor, samples.R_base_sensor, samples.pose, samples.t  # truth: GravityModel
 """
 
 from __future__ import annotations
 
 from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmSpec, c4_like_arm
-from ftcomp.sim.cell import HOME_Q_RAD, SimCell
-from ftcomp.sim.collect import (
-    COLLECTION_POSITION_BASE_M,
-    PoseList,
-    StaticCollection,
-    collect_static_samples,
-    paper_poses,
-    read_pose_file,
-)
+from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, HOME_Q_RAD, SimCell
+from ftcomp.sim.collect import record_with_truth
 from ftcomp.sim.ik import DifferentialIK, dls_joint_velocity, solve_pose
+from ftcomp.sim.placement_cell import SimPlacementCell
 from ftcomp.sim.scene import NAMES, SceneConfig, build_mjcf
-from ftcomp.sim.sensor import (
-    PAPER_FORCE_BIAS_N,
-    PAPER_TORQUE_BIAS_Nm,
-    SensorSpec,
-    SimWrenchSensor,
-)
+from ftcomp.sim.sensor import SensorSpec, SimWrenchSensor
 from ftcomp.sim.surfaces import SURFACE_KINDS, BookSpec, SpongeSpec, SurfaceKind, TableSpec
-from ftcomp.sim.tool import (
-    TABLE4_LOAD_WEIGHTS_N,
-    LoadSpec,
-    ToolSpec,
-    paper_tool,
-    table4_loads,
-)
+from ftcomp.sim.tool import LoadSpec, ToolSpec, paper_tool, table4_loads
 
 __all__ = [
     "ARM_JOINT_NAMES",
     "COLLECTION_POSITION_BASE_M",
     "HOME_Q_RAD",
     "NAMES",
-    "PAPER_FORCE_BIAS_N",
     "SURFACE_KINDS",
-    "TABLE4_LOAD_WEIGHTS_N",
     "ArmSpec",
     "BookSpec",
     "DifferentialIK",
     "LoadSpec",
-    "PAPER_TORQUE_BIAS_Nm",
-    "PoseList",
     "SceneConfig",
     "SensorSpec",
     "SimCell",
+    "SimPlacementCell",
     "SimWrenchSensor",
     "SpongeSpec",
-    "StaticCollection",
     "SurfaceKind",
     "TableSpec",
     "ToolSpec",
     "build_mjcf",
     "c4_like_arm",
-    "collect_static_samples",
     "dls_joint_velocity",
-    "paper_poses",
     "paper_tool",
-    "read_pose_file",
+    "record_with_truth",
     "solve_pose",
     "table4_loads",
 ]

@@ -1,7 +1,8 @@
 """The simulated robot cell: arm, F/T sensor, gripper, load and surfaces, stepped at 1 kHz.
 
-:class:`SimCell` implements :class:`ftcomp.interfaces.Robot`; its :attr:`SimCell.sensor`
-implements :class:`ftcomp.interfaces.WrenchSensor`. Frames follow the interfaces: poses of the
+:class:`SimCell` implements :class:`ftcomp.hardware.protocols.Robot`; its
+:attr:`SimCell.sensor` implements :class:`ftcomp.hardware.protocols.WrenchSensor`. Frames follow
+the protocols (the simulated TCP is the sensor frame, an identity mount): poses of the
 sensor frame in the (tilted) robot *base* frame, twists of the sensor frame's origin in the base
 frame, wrenches in the sensor frame. Only :meth:`SimCell.true_contact_force_N` and the
 placement helpers speak of the *world* (z up, level; gravity along -z).
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from types import TracebackType
 from typing import Final
 
 import mujoco
@@ -24,16 +26,20 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import ParameterError, SimulationError, UnreachablePoseError
+from ftcomp.hardware.protocols import PoseSample, WrenchSample
 from ftcomp.model import GravityModel
 from ftcomp.sim.arm import ARM_JOINT_NAMES
 from ftcomp.sim.ik import DifferentialIK, solve_pose
 from ftcomp.sim.scene import NAMES, SceneConfig, build_mjcf
 from ftcomp.sim.sensor import SensorSpec, SimWrenchSensor
 
-__all__ = ["HOME_Q_RAD", "SimCell"]
+__all__ = ["COLLECTION_POSITION_BASE_M", "HOME_Q_RAD", "SimCell"]
 
 #: Start configuration: tool pointing straight down in front of the robot [rad].
 HOME_Q_RAD: Final = (0.0, 0.0, 0.6, 0.0, math.pi / 2 - 0.6, 0.0)
+#: Where the sensor origin is held for static calibration readings, base frame [m]: in front of
+#: the robot, high enough above the table for every orientation of the paper's poses.
+COLLECTION_POSITION_BASE_M: Final = (0.45, 0.0, 0.42)
 #: Damping of the control-cycle differential IK [m or rad]: negligible away from singularities.
 _DLS_DAMPING: Final = 1e-3
 #: Joint speed limit of the velocity interface [rad/s] (the C4's slowest axes reach ~7 rad/s).
@@ -55,7 +61,7 @@ def _min_jerk(tau: float) -> tuple[float, float]:
 
 
 class SimCell:
-    """A MuJoCo robot cell implementing the :class:`~ftcomp.interfaces.Robot` protocol.
+    """A MuJoCo robot cell implementing the :class:`~ftcomp.hardware.protocols.Robot` protocol.
 
     Args:
         config: the scene (tilt, gripper, load, surface...). Default: level base, gripper,
@@ -154,7 +160,7 @@ class SimCell:
 
     @property
     def sensor(self) -> SimWrenchSensor:
-        """The wrist F/T sensor (implements :class:`~ftcomp.interfaces.WrenchSensor`)."""
+        """The wrist F/T sensor (implements :class:`~ftcomp.hardware.protocols.WrenchSensor`)."""
         return self._sensor
 
     @property
@@ -183,9 +189,31 @@ class SimCell:
         return self._weld >= 0 and bool(self._data.eq_active[self._weld])
 
     # ----------------------------------------------------------------- Robot protocol
+    def __enter__(self) -> SimCell:
+        """Nothing to connect: the cell is built."""
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Stop motion (the joints hold their commanded position)."""
+        self.stop()
+
     def time(self) -> float:
         """Simulation time [s]."""
         return float(self._data.time)
+
+    def now_ns(self) -> int:
+        """Simulation time [ns]: the clock of every time stamp of this cell."""
+        return round(self._data.time * 1e9)
+
+    def pose(self) -> PoseSample:
+        """The TCP pose, stamped: the simulated TCP *is* the sensor frame (identity mount)."""
+        p, R = self.sensor_pose()
+        return PoseSample(self.now_ns(), p, R)
 
     def sensor_pose(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(p_base_sensor [m] (3,), R_base_sensor (3, 3))`` of the latest physics state."""
@@ -406,15 +434,14 @@ class SimCell:
         """
         if n_samples < 1:
             raise ParameterError(f"n_samples must be >= 1, got {n_samples}")
-        rate = self._sensor_spec.output_rate_Hz
-        k0 = self._sensor.tick(self.time()) + 1
-        t = (k0 + np.arange(n_samples)) / rate
-        ideal = np.empty((n_samples, 6))
-        for i in range(n_samples):
-            while self.time() < t[i] - 1e-9:
-                self.wait_cycle()
-            ideal[i] = self.ideal_wrench_sensor()
-        return t, self._sensor.convert(ideal)
+        self._sensor.read_new()  # only readings from now on
+        samples: list[WrenchSample] = []
+        while len(samples) < n_samples:
+            self.wait_cycle()
+            samples.extend(self._sensor.read_new())
+        kept = samples[:n_samples]
+        t = np.array([s.t_ns for s in kept], dtype=float) * 1e-9
+        return t, np.array([s.wrench_sensor for s in kept])
 
     def true_gravity_model(self) -> GravityModel:
         """The truth calibration should find now: what hangs below the sensor, its bias, tilt.

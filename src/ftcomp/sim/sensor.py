@@ -14,21 +14,20 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from types import TracebackType
 from typing import Final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ftcomp import paper
 from ftcomp.errors import ParameterError
-from ftcomp.interfaces import WrenchSample
+from ftcomp.hardware.protocols import WrenchSample
 
-__all__ = ["PAPER_FORCE_BIAS_N", "PAPER_TORQUE_BIAS_Nm", "SensorSpec", "SimWrenchSensor"]
-
-#: The paper's identified sensor zero (section 2.2.1) [N] and [N*m], sensor frame.
-PAPER_FORCE_BIAS_N: Final = (-0.8613, 1.1015, 0.1976)
-PAPER_TORQUE_BIAS_Nm: Final = (-0.0002, -0.0605, 0.0255)
+__all__ = ["SensorSpec", "SimWrenchSensor"]
 
 _NOISE_BLOCK: Final = 4096
+_NS_PER_S: Final = 1_000_000_000
 
 
 def _vec3(name: str, value: object) -> NDArray[np.float64]:
@@ -67,9 +66,9 @@ class SensorSpec:
     resolution_fraction_of_range: float = 1.0 / 2000.0
     force_noise_std_N: float = 0.125
     torque_noise_std_Nm: float = 0.003
-    force_bias_N: NDArray[np.float64] = field(default_factory=lambda: np.array(PAPER_FORCE_BIAS_N))
+    force_bias_N: NDArray[np.float64] = field(default_factory=lambda: np.array(paper.FORCE_BIAS_N))
     torque_bias_Nm: NDArray[np.float64] = field(
-        default_factory=lambda: np.array(PAPER_TORQUE_BIAS_Nm)
+        default_factory=lambda: np.array(paper.TORQUE_BIAS_Nm)
     )
     output_rate_Hz: float = 1200.0
 
@@ -158,7 +157,7 @@ class SensorSpec:
 
 
 class SimWrenchSensor:
-    """The simulated sensor: implements :class:`ftcomp.interfaces.WrenchSensor`.
+    """The simulated sensor: implements :class:`ftcomp.hardware.protocols.WrenchSensor`.
 
     Args:
         spec: the sensor's specification.
@@ -193,6 +192,7 @@ class SimWrenchSensor:
         self._inv_range = 1.0 / spec.range_6
         self._inv_step = 1.0 / self._step if self._step is not None else np.ones(6)
         self._overload = spec.overload_6
+        self._ns_per_tick = _NS_PER_S / spec.output_rate_Hz
 
     @property
     def spec(self) -> SensorSpec:
@@ -229,8 +229,24 @@ class SimWrenchSensor:
         self._overloaded = self._overloaded or bool(np.any(overloaded))
         return readings
 
+    def __enter__(self) -> SimWrenchSensor:
+        """Nothing to connect: the sensor lives in the cell."""
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Nothing to close."""
+
+    def _stamp_ns(self, k: int) -> int:
+        """The time stamp of output tick ``k`` [ns] on the simulation clock."""
+        return round(k * self._ns_per_tick)
+
     def read(self) -> WrenchSample:
-        """The newest reading, stamped with its output tick [s] (non-blocking)."""
+        """The newest reading, stamped with its output tick [ns] (non-blocking)."""
         k = self.tick(self._clock())
         if k == self._last_tick and self._last is not None:
             return self._last
@@ -251,5 +267,25 @@ class SimWrenchSensor:
             np.rint(x, out=x)
             x *= self._step
         self._last_tick = k
-        self._last = WrenchSample(k / self._spec.output_rate_Hz, x)
+        self._last = WrenchSample(self._stamp_ns(k), x)
         return self._last
+
+    def read_new(self) -> list[WrenchSample]:
+        """Every output tick since the previous read, oldest first.
+
+        The physics advances one control cycle at a time, so every tick since the last read
+        sees the newest physics state (a real sensor sampling a signal held for one cycle).
+        The first call returns the newest reading alone.
+        """
+        k = self.tick(self._clock())
+        if self._last is None or self._last_tick < 0:
+            return [self.read()]
+        n = k - self._last_tick
+        if n <= 0:
+            return []
+        readings = self.convert(np.broadcast_to(self._ideal(), (n, 6)))
+        first = self._last_tick + 1
+        samples = [WrenchSample(self._stamp_ns(first + i), readings[i]) for i in range(n)]
+        self._last_tick = k
+        self._last = samples[-1]
+        return samples

@@ -10,24 +10,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Final
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp import paper
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 
 __all__ = [
-    "TABLE4_LOAD_WEIGHTS_N",
     "LoadSpec",
     "ToolSpec",
     "paper_tool",
     "table4_loads",
 ]
-
-#: True weights of the six loads of the paper's Table 4 [N] (scale mass times 9.8 m/s^2).
-TABLE4_LOAD_WEIGHTS_N: Final = (1.005, 2.214, 3.180, 4.116, 5.244, 6.066)
 
 
 def _vec3(name: str, value: object) -> NDArray[np.float64]:
@@ -56,13 +52,13 @@ class ToolSpec:
         finger_length_m: length of the gripper's fingers along sensor z [m] (visual only).
     """
 
-    sensing_end_weight_N: float = 0.835
+    sensing_end_weight_N: float = paper.SENSING_END_WEIGHT_N
     sensing_end_cog_m: NDArray[np.float64] = field(
         default_factory=lambda: np.array([0.0, 0.0, 0.008])
     )
-    total_weight_N: float = 3.153
+    total_weight_N: float = paper.TOOL_WEIGHT_N
     total_cog_m: NDArray[np.float64] = field(
-        default_factory=lambda: np.array([0.0001, -0.0003, 0.0470])
+        default_factory=lambda: np.array(paper.CENTER_OF_GRAVITY_M)
     )
     grasp_point_m: NDArray[np.float64] = field(default_factory=lambda: np.array([0.0, 0.0, 0.125]))
     finger_length_m: float = 0.07
@@ -137,5 +133,5 @@ def table4_loads() -> tuple[LoadSpec, ...]:
     """The six loads of the paper's Table 4, by their true weights."""
     return tuple(
         LoadSpec.from_weight(w, name=f"table4_load{i}")
-        for i, w in enumerate(TABLE4_LOAD_WEIGHTS_N, start=1)
+        for i, w in enumerate(paper.TABLE4_LOAD_WEIGHTS_N, start=1)
     )

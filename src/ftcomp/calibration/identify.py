@@ -2,7 +2,7 @@
 
 :func:`calibrate` averages the readings of each pose (the paper averages 500 per pose), checks
 the poses can separate bias from gravity, fits with the chosen method
-(:mod:`ftcomp.estimators`) and reports what a user needs to trust the result: the standard
+(:mod:`ftcomp.calibration.methods`) and reports what a user needs to trust the result: the standard
 error of every parameter, the regressor's condition number, per-pose residuals, the paper's
 Table-3 relative errors and the leave-one-pose-out prediction error.
 """
@@ -16,11 +16,18 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp.calibration.methods import (
+    Fit,
+    Method,
+    fit_joint,
+    fit_paper,
+    force_regressor,
+    predict_wrench,
+)
 from ftcomp.errors import IdentificationError, ParameterError
-from ftcomp.estimators import Fit, Method, fit_joint, fit_paper, force_regressor, predict_wrench
 from ftcomp.frames import tilt_from_gravity_in_base
-from ftcomp.io.samples import Samples
 from ftcomp.model import GravityModel
+from ftcomp.samples import Samples
 
 __all__ = ["CONDITION_WARNING", "Calibration", "StandardErrors", "calibrate", "pose_means"]
 
@@ -117,6 +124,8 @@ class Calibration:
     def loo_rms(self) -> tuple[float, float]:
         """RMS leave-one-pose-out prediction error: force [N], torque [N*m]."""
         e = self.loo_error
+        if not np.any(np.isfinite(e)):
+            return math.nan, math.nan
         with np.errstate(invalid="ignore"):
             return (
                 float(np.sqrt(np.nanmean(e[:, :3] ** 2))),

@@ -7,11 +7,11 @@ import json
 import numpy as np
 import pytest
 
-from ftcomp.calibration import calibrate
+from ftcomp.calibration.identify import calibrate
 from ftcomp.errors import CalibrationFileError, ParameterError
 from ftcomp.io.atomic import atomic_write_text, check_writable
-from ftcomp.io.calibration_file import FORMAT, load_calibration, save_calibration
-from ftcomp.io.samples import read_samples
+from ftcomp.io.calibration_json import FORMAT, load_calibration, save_calibration
+from ftcomp.io.samples_csv import read_samples
 
 from conftest import PAPER_CSV
 

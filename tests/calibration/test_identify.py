@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration import CONDITION_WARNING, calibrate
+from ftcomp.calibration.identify import CONDITION_WARNING, calibrate
+from ftcomp.calibration.methods import fit_joint, fit_paper, force_regressor
 from ftcomp.errors import IdentificationError
-from ftcomp.estimators import fit_joint, fit_paper, force_regressor
-from ftcomp.io.samples import Samples, read_samples
+from ftcomp.io.samples_csv import read_samples
 from ftcomp.model import GravityModel
+from ftcomp.samples import Samples
 
 from conftest import PAPER_CSV, PUBLISHED_JSON, TRUE_MODEL, synthetic_samples
 
@@ -124,7 +125,7 @@ def test_standard_errors_are_honest_over_many_trials() -> None:
 
 
 def test_joint_jacobian_matches_finite_differences(rng) -> None:
-    from ftcomp.estimators import _jacobian, _residuals
+    from ftcomp.calibration.methods import _jacobian, _residuals
 
     R = Rotation.random(5, rng=rng).as_matrix()
     theta = rng.normal(size=12)
@@ -158,7 +159,7 @@ def test_joint_fit_uses_the_scatter_of_repeated_readings_as_weights(rng) -> None
     """A noisier torque channel gets less weight: same answer as an explicit sigma."""
     samples = synthetic_samples(rng, readings=30)
     result = calibrate(samples, method="joint", leave_one_out=False)
-    from ftcomp.calibration import pose_means
+    from ftcomp.calibration.identify import pose_means
 
     _, R, mean, count, var = pose_means(samples)
     sigma = np.sqrt(np.sum(var * count[:, None] * (count[:, None] - 1), axis=0) / np.sum(count - 1))

@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import InputFileError
 from ftcomp.frames import ENCODING_COLUMNS
-from ftcomp.io.samples import read_samples, write_samples
+from ftcomp.io.samples_csv import read_samples, write_samples
 
 GOOD_HEADER = "pose,alpha_deg,beta_deg,gamma_deg,fx,fy,fz,tx,ty,tz"
 GOOD_ROWS = [

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration import Calibration, StandardErrors
+from ftcomp.calibration.identify import Calibration, StandardErrors
 from ftcomp.errors import CalibrationFileError
 from ftcomp.io.atomic import atomic_write_text
 from ftcomp.model import GravityModel

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from ftcomp.cli import main
-from ftcomp.demo import MARKER_FILE
+from ftcomp.experiments.demo import MARKER_FILE
 
 
 class _Images(HTMLParser):

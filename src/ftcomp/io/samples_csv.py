@@ -18,71 +18,21 @@ import io
 import math
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, OrientationEncoding, encode_orientation
 from ftcomp.io.atomic import atomic_write_text
+from ftcomp.samples import WRENCH_COLUMNS, Samples
 
-__all__ = ["WRENCH_COLUMNS", "Samples", "read_samples", "write_samples", "write_table"]
-
-#: The six wrench columns, in order: forces [N] then torques [N*m], sensor frame.
-WRENCH_COLUMNS: tuple[str, ...] = ("fx", "fy", "fz", "tx", "ty", "tz")
+__all__ = ["read_samples", "write_samples", "write_table"]
 
 _OTHER_DELIMITERS = (";", "\t", "|")
 _QUATERNION_NORM_TOLERANCE = 0.01
-
-
-@dataclass(frozen=True)
-class Samples:
-    """Readings loaded from a sample CSV.
-
-    Attributes:
-        wrench_sensor: [N, N*m], sensor frame, shape (N, 6).
-        R_base_sensor: sensor orientation in the base frame, shape (N, 3, 3).
-        encoding: the orientation encoding the file used.
-        pose: pose id of each row as text, shape (N,), or None without a ``pose`` column.
-        t: time stamps [s], shape (N,), or None without a ``t`` column.
-        header: the file's column names, in order.
-        rows: every data row's cells as read, for writing them back out unchanged.
-        source: where the samples came from (the file path), for messages.
-        warnings: things that look wrong but were accepted (e.g. angles that look like radians).
-    """
-
-    wrench_sensor: NDArray[np.float64] = field(repr=False)
-    R_base_sensor: NDArray[np.float64] = field(repr=False)
-    encoding: OrientationEncoding
-    pose: NDArray[np.str_] | None = field(default=None, repr=False)
-    t: NDArray[np.float64] | None = field(default=None, repr=False)
-    header: tuple[str, ...] = ()
-    rows: tuple[tuple[str, ...], ...] = field(default=(), repr=False)
-    source: str = "<memory>"
-    warnings: tuple[str, ...] = ()
-
-    def __post_init__(self) -> None:
-        n = len(self.wrench_sensor)
-        for name, shape in (("wrench_sensor", (n, 6)), ("R_base_sensor", (n, 3, 3))):
-            arr = np.array(getattr(self, name), dtype=float)
-            if arr.shape != shape:
-                raise ParameterError(f"Samples.{name} must have shape {shape}, got {arr.shape}")
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
-        for name in ("pose", "t"):
-            value = getattr(self, name)
-            if value is not None:
-                arr = np.array(value, dtype=str if name == "pose" else float)
-                if arr.shape != (n,):
-                    raise ParameterError(f"Samples.{name} must have shape ({n},), got {arr.shape}")
-                arr.setflags(write=False)
-                object.__setattr__(self, name, arr)
-
-    def __len__(self) -> int:
-        return len(self.wrench_sensor)
 
 
 def _suggest(name: str, header: Sequence[str]) -> str:

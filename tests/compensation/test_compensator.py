@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ftcomp.compensation import GravityCompensator
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.compensation.load import estimate_load, load_weight_N
 from ftcomp.errors import ParameterError
 from ftcomp.model import GravityModel
 
@@ -64,14 +65,14 @@ def _load_readings(
 def test_load_weight_is_the_norm_of_the_contact_force(rng) -> None:
     w, R = _load_readings(rng, 4.905, np.array([0.0, 0.01, 0.09]), 5)
     np.testing.assert_allclose(
-        GravityCompensator(TRUE_MODEL).load_weight_N(w, R), 4.905, atol=1e-12
+        load_weight_N(GravityCompensator(TRUE_MODEL), w, R), 4.905, atol=1e-12
     )
 
 
 def test_load_mass_and_centre_of_gravity_are_estimated_from_several_poses(rng) -> None:
     cog = np.array([0.004, -0.01, 0.09])
     w, R = _load_readings(rng, 4.905, cog, 4)
-    est = GravityCompensator(TRUE_MODEL).estimate_load(w, R)
+    est = estimate_load(GravityCompensator(TRUE_MODEL), w, R)
     assert est.weight_N == pytest.approx(4.905, abs=1e-12)
     assert est.mass_kg == pytest.approx(4.905 / 9.80665, abs=1e-12)
     np.testing.assert_allclose(est.center_of_gravity_m, cog, atol=1e-12)
@@ -80,7 +81,7 @@ def test_load_mass_and_centre_of_gravity_are_estimated_from_several_poses(rng) -
 
 def test_one_pose_observes_only_the_cog_across_gravity(rng) -> None:
     w, R = _load_readings(rng, 2.0, np.array([0.0, 0.0, 0.09]), 1)
-    est = GravityCompensator(TRUE_MODEL).estimate_load(w, R)
+    est = estimate_load(GravityCompensator(TRUE_MODEL), w, R)
     assert not est.cog_fully_observed
     assert est.weight_N == pytest.approx(2.0, abs=1e-12)
 

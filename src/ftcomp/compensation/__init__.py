@@ -1,0 +1,3 @@
+"""Gravity compensation at run time (:mod:`.compensator`) and weighing a grasped load
+(:mod:`.load`).
+"""

@@ -1,0 +1,217 @@
+"""One control loop for every command that runs one: a rate limiter and one cycle.
+
+A cycle is ``read sensor and pose -> compensate -> step -> command -> log``:
+
+- :class:`ControlCycle` does the I/O around the step: it reads the newest wrench and the robot's
+  pose, turns the TCP pose into the sensor's through the :class:`~ftcomp.hardware.protocols.Mount`,
+  compensates with the identified calibration (or passes the raw reading on), and sends a
+  sensor-origin twist to the robot as a TCP twist.
+- The *step* is any callable ``step(reading) -> twist | None``: the admittance controller of a
+  placement, a recorder that commands nothing, an online estimator. ``None`` ends the loop.
+- *Sinks* are callables ``sink(reading, twist)`` run after the step (logs, live displays).
+- :func:`run_loop` runs cycles until the step says stop; on any exit (also an exception or
+  Ctrl-C) it stops the robot first.
+
+Timing stays apart from computing: the robot's ``wait_cycle`` paces the loop (the simulated cell
+advances its physics by one period; a real robot's driver waits for its next period), and a
+:class:`RateLimiter` on :func:`time.perf_counter` can hold a loop to wall-clock time where the
+robot does not. The limiter reports its slack and logs overruns instead of raising; a loop that
+is late too often is a fault for the caller to act on (:attr:`RateLimiter.late_in_a_row`).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.errors import ParameterError
+from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
+
+__all__ = ["ControlCycle", "LoopStats", "RateLimiter", "Reading", "run_loop"]
+
+_log = logging.getLogger(__name__)
+
+Step = Callable[["Reading"], "NDArray[np.float64] | None"]
+Sink = Callable[["Reading", "NDArray[np.float64]"], None]
+
+
+class RateLimiter:
+    """Hold a loop to a fixed period of wall-clock time (``time.perf_counter``).
+
+    Call :meth:`sleep` once per cycle, after the cycle's work: it sleeps until the next period
+    starts and returns the slack (negative when the cycle overran). An overrun is logged with its
+    lateness (at most once a second) and counted; it never raises. After an overrun of more than
+    a whole period the schedule restarts from now instead of trying to catch up.
+
+    Args:
+        period_s: the loop period [s], > 0.
+        name: names the loop in log messages.
+        clock: the time source [s] (for tests).
+        sleep: the sleep function [s] (for tests).
+    """
+
+    def __init__(
+        self,
+        period_s: float,
+        *,
+        name: str = "loop",
+        clock: Callable[[], float] = time.perf_counter,
+        sleep: Callable[[float], None] = time.sleep,
+    ) -> None:
+        if not period_s > 0.0:
+            raise ParameterError(f"period_s must be > 0 s, got {period_s}")
+        self.period_s = period_s
+        self.name = name
+        self._clock = clock
+        self._sleep = sleep
+        self._next = clock() + period_s
+        self._last_log = -float("inf")
+        #: Slack of the last cycle [s] (negative: it overran by that much).
+        self.slack_s = 0.0
+        #: Cycles that overran since the start, and in a row up to now.
+        self.overruns = 0
+        self.late_in_a_row = 0
+        #: The most negative slack seen [s].
+        self.worst_slack_s = 0.0
+
+    def sleep(self) -> float:
+        """Wait for the next period; return the slack [s]."""
+        now = self._clock()
+        slack = self._next - now
+        self.slack_s = slack
+        if slack >= 0.0:
+            self.late_in_a_row = 0
+            self._sleep(slack)
+            self._next += self.period_s
+            return slack
+        self.overruns += 1
+        self.late_in_a_row += 1
+        self.worst_slack_s = min(self.worst_slack_s, slack)
+        if now - self._last_log >= 1.0:
+            _log.warning("%s is late by %.1f ms", self.name, -slack * 1e3)
+            self._last_log = now
+        self._next = now + self.period_s if -slack > self.period_s else self._next + self.period_s
+        return slack
+
+
+@dataclass(frozen=True, slots=True)
+class Reading:
+    """What one cycle read, in the frames the controller works in.
+
+    Attributes:
+        t_sample_ns: the wrench sample's stamp [ns] (session clock).
+        now_ns: the robot's clock when the cycle read [ns].
+        wrench_raw_sensor: the reading [N, N*m], sensor frame, (6,).
+        wrench_contact_sensor: the compensated wrench (the raw reading without a compensator)
+            [N, N*m], sensor frame, (6,); may be non-finite when the sensor sent garbage.
+        p_base_sensor: sensor origin [m], base frame, (3,).
+        R_base_sensor: sensor orientation, (3, 3).
+        R_base_tcp: TCP orientation, (3, 3) (for the mount's twist conversion).
+    """
+
+    t_sample_ns: int
+    now_ns: int
+    wrench_raw_sensor: NDArray[np.float64]
+    wrench_contact_sensor: NDArray[np.float64]
+    p_base_sensor: NDArray[np.float64]
+    R_base_sensor: NDArray[np.float64]
+    R_base_tcp: NDArray[np.float64]
+
+
+class ControlCycle:
+    """The I/O of one control cycle around a step (see the module docstring).
+
+    Args:
+        robot: the arm (entered).
+        sensor: the F/T sensor (entered), on the robot's clock.
+        mount: the sensor frame on the TCP (identity by default).
+        compensator: removes bias and tool gravity with the identified calibration; None passes
+            the raw reading on (the paper's uncompensated comparison).
+        rate_limiter: holds the loop to wall-clock time after each ``robot.wait_cycle()``;
+            None when the robot paces the loop (simulation, a driver that blocks per period).
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        sensor: WrenchSensor,
+        *,
+        mount: Mount | None = None,
+        compensator: GravityCompensator | None = None,
+        rate_limiter: RateLimiter | None = None,
+    ) -> None:
+        self.robot = robot
+        self.sensor = sensor
+        self.mount = mount if mount is not None else Mount()
+        self.compensator = compensator
+        self.rate_limiter = rate_limiter
+        self.period_s = robot.control_period_s
+
+    def read(self) -> Reading:
+        """Read the newest wrench and the pose, and compensate."""
+        sample = self.sensor.read()
+        pose = self.robot.pose()
+        p, R = self.mount.sensor_pose(pose.p_base_tcp, pose.R_base_tcp)
+        w = sample.wrench_sensor
+        contact = w if self.compensator is None else self.compensator.compensate(w, R)
+        return Reading(sample.t_ns, pose.t_ns, w, contact, p, R, pose.R_base_tcp)
+
+    def command(self, twist_sensor_base: NDArray[np.float64], reading: Reading) -> None:
+        """Send the sensor origin's twist (base frame) to the robot as its TCP's twist."""
+        self.robot.command_twist(self.mount.tcp_twist(twist_sensor_base, reading.R_base_tcp))
+
+    def advance(self) -> None:
+        """Wait for (or simulate) the next period."""
+        self.robot.wait_cycle()
+        if self.rate_limiter is not None:
+            self.rate_limiter.sleep()
+
+
+@dataclass(frozen=True)
+class LoopStats:
+    """How a loop ran: cycles run, and the rate limiter's overruns (0 without one)."""
+
+    cycles: int
+    overruns: int
+    worst_slack_s: float
+
+
+def run_loop(
+    cycle: ControlCycle,
+    step: Step,
+    *,
+    sinks: Sequence[Sink] = (),
+    max_cycles: int | None = None,
+) -> LoopStats:
+    """Run cycles until ``step`` returns None (or ``max_cycles``); stop the robot on any exit.
+
+    Each cycle: ``reading = cycle.read()``, ``twist = step(reading)``, every sink
+    ``sink(reading, twist)``, ``cycle.command(twist)``, ``cycle.advance()``. When the step
+    returns None the sinks do not run and nothing is commanded.
+    """
+    n = 0
+    try:
+        while max_cycles is None or n < max_cycles:
+            reading = cycle.read()
+            twist = step(reading)
+            if twist is None:
+                break
+            for sink in sinks:
+                sink(reading, twist)
+            cycle.command(twist, reading)
+            cycle.advance()
+            n += 1
+    finally:
+        cycle.robot.stop()
+    limiter = cycle.rate_limiter
+    return LoopStats(
+        n,
+        limiter.overruns if limiter is not None else 0,
+        limiter.worst_slack_s if limiter is not None else 0.0,
+    )

@@ -1,0 +1,262 @@
+"""The hardware seam: what ftcomp needs of a wrench sensor and of a robot.
+
+Every backend (the MuJoCo cell now; ATI Net F/T, Universal Robots, ROS 2 topics and recorded
+files later) implements these :class:`typing.Protocol` classes, so calibration, compensation
+and control run unchanged on any of them. Backends are chosen by URI
+(:mod:`ftcomp.hardware.registry`).
+
+Lifecycle: a sensor and a robot are context managers. Entering connects; leaving *stops motion
+first* and then closes the connection, also when the block ends by an exception or Ctrl-C.
+
+Clock: every time stamp is an integer number of nanoseconds (``t_ns``) on the clock of the
+*robot* the session runs with, so a sample's age is ``robot.now_ns() - sample.t_ns``. Hardware
+backends use the host's monotonic clock (:func:`time.monotonic_ns`), stamping each reading when
+it arrives; the simulated cell uses its simulation time. Seconds (float) appear only in
+arithmetic.
+
+Frames and units (``docs/conventions.md``): a robot reports the pose of its *TCP* (or flange)
+in its base frame; the sensor frame is fixed to the TCP by a :class:`Mount`, which is the one
+place where ``R_base_sensor = R_base_tcp @ R_tcp_sensor`` is computed. Wrenches are what the tool
+exerts on the sensor, sensor frame [N, N*m]. Twists ``[vx, vy, vz, wx, wy, wz]`` [m/s, rad/s]
+are in the base frame, of the TCP origin when sent to a robot.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from types import TracebackType
+from typing import Protocol, TypeVar, runtime_checkable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ftcomp.arrays import freeze_field
+from ftcomp.errors import ParameterError
+
+__all__ = ["Mount", "PoseSample", "Robot", "WrenchSample", "WrenchSensor"]
+
+_NS_PER_S = 1_000_000_000
+_SensorT = TypeVar("_SensorT", bound="WrenchSensor")
+_RobotT = TypeVar("_RobotT", bound="Robot")
+
+
+@dataclass(frozen=True)
+class WrenchSample:
+    """One time-stamped sensor reading.
+
+    Attributes:
+        t_ns: time stamp [ns] on the session's clock (see the module docstring).
+        wrench_sensor: ``[fx, fy, fz, tx, ty, tz]`` [N, N*m], sensor frame, shape (6,); may hold
+            NaN when the sensor reports garbage: consumers check (see ``ftcomp.control.safety``).
+    """
+
+    t_ns: int
+    wrench_sensor: NDArray[np.float64] = field(repr=False)
+
+    def __post_init__(self) -> None:
+        freeze_field(self, "wrench_sensor", (6,))
+
+    @property
+    def t_s(self) -> float:
+        """The time stamp in seconds (for arithmetic)."""
+        return self.t_ns / _NS_PER_S
+
+
+@dataclass(frozen=True)
+class PoseSample:
+    """A time-stamped pose of the robot's TCP (or flange) in its base frame.
+
+    Attributes:
+        t_ns: time stamp [ns] on the session's clock.
+        p_base_tcp: TCP origin [m], base frame, shape (3,).
+        R_base_tcp: TCP orientation, shape (3, 3).
+    """
+
+    t_ns: int
+    p_base_tcp: NDArray[np.float64] = field(repr=False)
+    R_base_tcp: NDArray[np.float64] = field(repr=False)
+
+    def __post_init__(self) -> None:
+        freeze_field(self, "p_base_tcp", (3,))
+        freeze_field(self, "R_base_tcp", (3, 3))
+
+
+def _rotation_matrix(name: str, value: ArrayLike) -> NDArray[np.float64]:
+    R = np.array(value, dtype=float)
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        raise ParameterError(f"{name} must be a finite 3x3 matrix, got shape {R.shape}")
+    if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0.0:
+        raise ParameterError(f"{name} is not a rotation matrix (R R^T != I or det < 0)")
+    return R
+
+
+@dataclass(frozen=True)
+class Mount:
+    """Where the sensor frame sits on the robot's TCP (or flange).
+
+    Attributes:
+        R_tcp_sensor: the sensor frame's orientation in the TCP frame, shape (3, 3);
+            identity by default (the sensor's axes are the TCP's).
+        p_tcp_sensor_m: the sensor frame's origin in the TCP frame [m], shape (3,); zeros by
+            default.
+    """
+
+    R_tcp_sensor: NDArray[np.float64] = field(default_factory=lambda: np.eye(3))
+    p_tcp_sensor_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    is_identity: bool = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(
+            self, "R_tcp_sensor", _rotation_matrix("R_tcp_sensor", self.R_tcp_sensor)
+        )
+        freeze_field(self, "R_tcp_sensor", (3, 3))
+        freeze_field(self, "p_tcp_sensor_m", (3,), finite=True)
+        identity = bool(
+            np.array_equal(self.R_tcp_sensor, np.eye(3)) and not np.any(self.p_tcp_sensor_m)
+        )
+        object.__setattr__(self, "is_identity", identity)
+
+    @classmethod
+    def from_xyz_rpy(
+        cls, xyz_m: ArrayLike = (0.0, 0.0, 0.0), rpy_deg: ArrayLike = (0.0, 0.0, 0.0)
+    ) -> Mount:
+        """From an offset [m] and fixed-axis roll, pitch, yaw [deg] (as in a URDF ``<origin>``:
+        ``R = Rz(yaw) Ry(pitch) Rx(roll)``)."""
+        from scipy.spatial.transform import Rotation
+
+        rpy = np.asarray(rpy_deg, dtype=float)
+        if rpy.shape != (3,) or not np.all(np.isfinite(rpy)):
+            raise ParameterError(f"rpy_deg must be 3 finite angles, got {rpy.tolist()}")
+        R = Rotation.from_euler("xyz", rpy, degrees=True).as_matrix()
+        return cls(R, np.asarray(xyz_m, dtype=float))
+
+    def sensor_pose(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(p_base_sensor, R_base_sensor)`` from the TCP's pose in the base frame."""
+        if self.is_identity:
+            return p_base_tcp, R_base_tcp
+        return p_base_tcp + R_base_tcp @ self.p_tcp_sensor_m, R_base_tcp @ self.R_tcp_sensor
+
+    def tcp_pose(
+        self, p_base_sensor: NDArray[np.float64], R_base_sensor: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The TCP pose that puts the sensor frame at ``(p_base_sensor, R_base_sensor)``."""
+        if self.is_identity:
+            return p_base_sensor, R_base_sensor
+        R_base_tcp = R_base_sensor @ self.R_tcp_sensor.T
+        return p_base_sensor - R_base_tcp @ self.p_tcp_sensor_m, R_base_tcp
+
+    def tcp_twist(
+        self, twist_sensor_base: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """The TCP origin's twist giving the sensor origin ``twist_sensor_base`` (base frame).
+
+        Both origins share the angular velocity w; ``v_tcp = v_sensor + w x (p_tcp - p_sensor)``
+        with ``p_tcp - p_sensor = -R_base_tcp @ p_tcp_sensor_m``.
+        """
+        if self.is_identity or not np.any(self.p_tcp_sensor_m):
+            return twist_sensor_base
+        lever = -(R_base_tcp @ self.p_tcp_sensor_m)
+        out = np.array(twist_sensor_base, dtype=float)
+        out[:3] += np.cross(out[3:], lever)
+        return out
+
+
+@runtime_checkable
+class WrenchSensor(Protocol):
+    """A six-axis force/torque sensor (a context manager: connect on enter, close on exit)."""
+
+    def __enter__(self: _SensorT) -> _SensorT:
+        """Connect (start streaming)."""
+        ...
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Stop streaming and close."""
+        ...
+
+    def read(self) -> WrenchSample:
+        """The newest reading (non-blocking; the same sample again if none arrived since)."""
+        ...
+
+    def read_new(self) -> list[WrenchSample]:
+        """Every reading since the previous call (oldest first; empty if none arrived)."""
+        ...
+
+
+@runtime_checkable
+class Robot(Protocol):
+    """A position-controlled arm with a Cartesian velocity interface, driven one cycle at a time.
+
+    A context manager: connect on enter; on exit (also by an exception or Ctrl-C) stop motion
+    first, then close.
+    """
+
+    @property
+    def control_period_s(self) -> float:
+        """Period of the control cycle [s]."""
+        ...
+
+    def __enter__(self: _RobotT) -> _RobotT:
+        """Connect."""
+        ...
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Stop motion, then close."""
+        ...
+
+    def now_ns(self) -> int:
+        """The session's clock [ns]."""
+        ...
+
+    def pose(self) -> PoseSample:
+        """The TCP's pose in the base frame now, time-stamped."""
+        ...
+
+    def move_pose(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64], duration_s: float
+    ) -> None:
+        """Blocking Cartesian move of the TCP to a pose (base frame) in about ``duration_s``.
+
+        Raises:
+            UnreachablePoseError: no joint configuration within the limits reaches it.
+        """
+        ...
+
+    def settle(self, max_duration_s: float) -> float:
+        """Hold still until the arm is at rest (blocking); return how long it took [s].
+
+        Raises:
+            FtcompError: still moving after ``max_duration_s`` [s].
+        """
+        ...
+
+    def command_twist(self, twist_base: NDArray[np.float64]) -> None:
+        """Set the TCP origin's velocity (base frame, shape (6,)) for the coming cycles."""
+        ...
+
+    def wait_cycle(self) -> None:
+        """Advance (simulation) or wait for (hardware) the next control period."""
+        ...
+
+    def stop(self) -> None:
+        """Zero the commanded velocity at once."""
+        ...
+
+
+def seconds_to_ns(t_s: float) -> int:
+    """``t_s`` [s] as integer nanoseconds (rounded to the nearest)."""
+    if not math.isfinite(t_s):
+        raise ParameterError(f"a time stamp must be finite, got {t_s}")
+    return round(t_s * _NS_PER_S)

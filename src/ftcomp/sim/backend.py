@@ -1,0 +1,88 @@
+"""The ``sim://`` backend: the MuJoCo cell as a robot and its wrist sensor.
+
+Robot URI options (all optional)::
+
+    sim://?tilt_deg=U,V       base mounting tilt [deg] (default: the paper's -0.204,-0.129)
+          &gripper=1|0        the paper's gripper, or the bare sensing end (default 1)
+          &load_kg=X          a load of X kg in the scene (parked on the floor)
+          &grasp=1|0          start with the load in the gripper (default 0)
+          &surface=none|sponge|book   what lies on the table (default none)
+          &seed=N             sensor-noise seed (default 0)
+
+The sensor URI is ``sim://`` with no options: the cell's own sensor, which needs the robot to be
+``sim://`` too (they share the simulation clock). The simulated TCP is the sensor frame, so the
+mount is the identity.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ftcomp import paper
+from ftcomp.errors import ParameterError
+from ftcomp.hardware.protocols import Robot, WrenchSensor
+from ftcomp.hardware.registry import Uri
+from ftcomp.sim.cell import SimCell
+from ftcomp.sim.scene import SceneConfig
+from ftcomp.sim.surfaces import SURFACE_KINDS
+from ftcomp.sim.tool import LoadSpec
+
+__all__ = ["MAX_LOAD_KG", "open_robot", "open_sensor", "scene_from_uri"]
+
+#: Largest load the simulated arm takes [kg] (the C4-A901S is rated for 4 kg).
+MAX_LOAD_KG = 4.0
+
+
+def scene_from_uri(uri: Uri) -> tuple[SceneConfig, int, bool]:
+    """``(scene, seed, grasp)`` from a ``sim://`` robot URI's options.
+
+    Raises:
+        ParameterError: an unknown or out-of-range option, naming the URI.
+    """
+    options = uri.reader()
+    tilt = options.floats("tilt_deg", paper.TILT_DEG)
+    gripper = options.flag("gripper", True)
+    load_kg = options.number("load_kg", None)
+    grasp = options.flag("grasp", False)
+    surface = options.text("surface", "none", SURFACE_KINDS)
+    seed = options.integer("seed", 0)
+    options.done()
+    for name, value in zip(("U", "V"), tilt, strict=True):
+        if abs(value) >= 30.0:
+            raise ParameterError(f"{uri.text!r}: tilt {name}={value} deg must be within +-30 deg")
+    if load_kg is not None and not 0.0 < load_kg <= MAX_LOAD_KG:
+        raise ParameterError(f"{uri.text!r}: load_kg must be in (0, {MAX_LOAD_KG}], got {load_kg}")
+    if load_kg is not None and not gripper:
+        raise ParameterError(f"{uri.text!r}: a load needs the gripper (drop gripper=0)")
+    if grasp and load_kg is None:
+        raise ParameterError(f"{uri.text!r}: grasp=1 needs a load (load_kg=X)")
+    if seed < 0:
+        raise ParameterError(f"{uri.text!r}: seed must be >= 0, got {seed}")
+    scene = SceneConfig(
+        tilt_U_rad=math.radians(tilt[0]),
+        tilt_V_rad=math.radians(tilt[1]),
+        gripper=gripper,
+        load=LoadSpec(load_kg) if load_kg is not None else None,
+        surface=surface,  # type: ignore[arg-type]
+    )
+    return scene, seed, grasp
+
+
+def open_robot(uri: Uri) -> Robot:
+    """A fresh simulated cell."""
+    scene, seed, grasp = scene_from_uri(uri)
+    cell = SimCell(scene, seed=seed)
+    if grasp:
+        cell.grasp()
+    return cell
+
+
+def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
+    """The wrist sensor of the session's simulated cell."""
+    if uri.options or uri.host or uri.path:
+        raise ParameterError(
+            f"{uri.text!r}: the simulated sensor takes no options; give them to --robot sim://"
+        )
+    if not isinstance(robot, SimCell):
+        raise ParameterError(f"{uri.text!r}: the simulated sensor needs --robot sim://")
+    return robot.sensor
