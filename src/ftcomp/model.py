@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ftcomp.arrays import freeze_field
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 from ftcomp.frames import gravity_in_base, gravity_in_sensor, tilt_from_gravity_in_base
@@ -30,16 +31,6 @@ def skew(v: ArrayLike) -> NDArray[np.float64]:
     """The cross-product matrix of ``v``: ``skew(v) @ x == np.cross(v, x)``, shape (3, 3)."""
     x, y, z = np.asarray(v, dtype=float)
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
-def _frozen_vector(name: str, value: ArrayLike) -> NDArray[np.float64]:
-    arr = np.array(value, dtype=float)
-    if arr.shape != (3,):
-        raise ParameterError(f"{name} must have 3 components, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ParameterError(f"{name} must be finite, got {arr.tolist()}")
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True)
@@ -70,7 +61,7 @@ class GravityModel:
             if not math.isfinite(value) or abs(value) >= math.pi / 2:
                 raise ParameterError(f"{name} must be finite and within +-pi/2, got {value}")
         for name in ("center_of_gravity_m", "force_bias_N", "torque_bias_Nm"):
-            object.__setattr__(self, name, _frozen_vector(name, getattr(self, name)))
+            freeze_field(self, name, (3,), finite=True)
 
     @classmethod
     def from_gravity_in_base(

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp.arrays import freeze_field
 from ftcomp.calibration.methods import (
     Fit,
     Method,
@@ -38,14 +39,6 @@ _CONDITION_SINGULAR = 1e7
 _DISTINCT_POSE_TOLERANCE = 1e-6  # Frobenius norm between rotation matrices
 
 
-def _frozen(value: object, shape: tuple[int, ...] | None = None) -> NDArray[np.float64]:
-    arr = np.array(value, dtype=float)
-    if shape is not None and arr.shape != shape:
-        raise ParameterError(f"expected shape {shape}, got {arr.shape}")
-    arr.setflags(write=False)
-    return arr
-
-
 @dataclass(frozen=True)
 class StandardErrors:
     """One standard error per identified quantity, in the quantity's own unit and frame."""
@@ -60,7 +53,7 @@ class StandardErrors:
 
     def __post_init__(self) -> None:
         for name in ("center_of_gravity_m", "force_bias_N", "torque_bias_Nm", "gravity_base_N"):
-            object.__setattr__(self, name, _frozen(getattr(self, name), (3,)))
+            freeze_field(self, name, (3,))
 
 
 @dataclass(frozen=True)
@@ -106,7 +99,7 @@ class Calibration:
             ("relative_error_percent", (n, 6)),
             ("loo_error", (n, 6)),
         ):
-            object.__setattr__(self, name, _frozen(getattr(self, name), shape))
+            freeze_field(self, name, shape)
 
     @property
     def residual_rms(self) -> tuple[float, float]:

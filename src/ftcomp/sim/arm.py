@@ -20,20 +20,13 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp.arrays import freeze_field
 from ftcomp.errors import ParameterError
 
 __all__ = ["ARM_JOINT_NAMES", "ArmSpec", "c4_like_arm"]
 
 #: MJCF names of the six arm joints, base to flange.
 ARM_JOINT_NAMES: Final = ("j1", "j2", "j3", "j4", "j5", "j6")
-
-
-def _frozen(name: str, value: object, shape: tuple[int, ...]) -> NDArray[np.float64]:
-    arr = np.array(value, dtype=float)
-    if arr.shape != shape or not np.all(np.isfinite(arr)):
-        raise ParameterError(f"{name} must be finite with shape {shape}, got {arr!r}")
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True)
@@ -99,7 +92,7 @@ class ArmSpec:
             "kv",
             "armature_kgm2",
         ):
-            object.__setattr__(self, name, _frozen(f"ArmSpec.{name}", getattr(self, name), (6,)))
+            freeze_field(self, name, (6,), finite=True)
         if np.any(self.joint_lower_rad >= self.joint_upper_rad):
             raise ParameterError("ArmSpec joint_lower_rad must be below joint_upper_rad")
         if np.any(self.link_masses_kg <= 0.0) or np.any(self.kp <= 0.0) or np.any(self.kv < 0.0):

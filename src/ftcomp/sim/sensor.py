@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ftcomp import paper
+from ftcomp.arrays import freeze_field
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import WrenchSample
 
@@ -28,14 +29,6 @@ __all__ = ["SensorSpec", "SimWrenchSensor"]
 
 _NOISE_BLOCK: Final = 4096
 _NS_PER_S: Final = 1_000_000_000
-
-
-def _vec3(name: str, value: object) -> NDArray[np.float64]:
-    arr = np.array(value, dtype=float)
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise ParameterError(f"SensorSpec.{name} must be 3 finite numbers, got {value!r}")
-    arr.setflags(write=False)
-    return arr
 
 
 @dataclass(frozen=True)
@@ -91,7 +84,7 @@ class SensorSpec:
         if self.resolution_fraction_of_range >= 1.0:
             raise ParameterError("SensorSpec.resolution_fraction_of_range must be below 1")
         for name in ("force_bias_N", "torque_bias_Nm"):
-            object.__setattr__(self, name, _vec3(name, getattr(self, name)))
+            freeze_field(self, name, (3,), finite=True)
 
     def ideal(self) -> SensorSpec:
         """The same sensor without noise and quantisation (bias, range and rate kept)."""

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp import paper
+from ftcomp.arrays import freeze_field, frozen_array
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 
@@ -24,14 +25,6 @@ __all__ = [
     "paper_tool",
     "table4_loads",
 ]
-
-
-def _vec3(name: str, value: object) -> NDArray[np.float64]:
-    arr = np.array(value, dtype=float)
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
-        raise ParameterError(f"{name} must be 3 finite numbers, got {value!r}")
-    arr.setflags(write=False)
-    return arr
 
 
 def _positive(name: str, value: float) -> None:
@@ -74,7 +67,7 @@ class ToolSpec:
                 f"{self.sensing_end_weight_N} N, got {self.total_weight_N}"
             )
         for name in ("sensing_end_cog_m", "total_cog_m", "grasp_point_m"):
-            object.__setattr__(self, name, _vec3(f"ToolSpec.{name}", getattr(self, name)))
+            freeze_field(self, name, (3,), finite=True)
 
     @property
     def gripper_weight_N(self) -> float:
@@ -107,7 +100,7 @@ class LoadSpec:
 
     def __post_init__(self) -> None:
         _positive("LoadSpec.mass_kg", self.mass_kg)
-        size = _vec3("LoadSpec.half_size_m", self.half_size_m)
+        size = frozen_array(self.half_size_m, (3,), name="LoadSpec.half_size_m", finite=True)
         if np.any(size <= 0.0):
             raise ParameterError(f"LoadSpec.half_size_m must be > 0, got {size.tolist()}")
         object.__setattr__(self, "half_size_m", size)
