@@ -40,7 +40,7 @@ def frozen_array(
     arr = np.array(value, dtype=dtype)
     if shape is not None and arr.shape != shape:
         raise ParameterError(f"{name} must have shape {shape}, got {arr.shape}")
-    if finite and not np.all(np.isfinite(arr)):
+    if finite and not np.isfinite(arr).all():
         raise ParameterError(f"{name} must be finite, got {arr.tolist()}")
     arr.setflags(write=False)
     return arr
@@ -55,6 +55,10 @@ def freeze_field(
     finite: bool = False,
 ) -> None:
     """Replace ``record.field_name`` (of a frozen dataclass) by its :func:`frozen_array`."""
-    name = f"{type(record).__name__}.{field_name}"
-    value = frozen_array(getattr(record, field_name), shape, name=name, dtype=dtype, finite=finite)
-    object.__setattr__(record, field_name, value)
+    # Hot path (a sample per control cycle): the name is built only for an error message.
+    arr = np.array(getattr(record, field_name), dtype=dtype)
+    if (shape is not None and arr.shape != shape) or (finite and not np.isfinite(arr).all()):
+        name = f"{type(record).__name__}.{field_name}"
+        frozen_array(arr, shape, name=name, dtype=dtype, finite=finite)  # raises
+    arr.setflags(write=False)
+    object.__setattr__(record, field_name, arr)

@@ -8,32 +8,14 @@ from pathlib import Path
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.identify import calibrate
+from ftcomp.calibration.identify import calibrate, deviations_in_standard_errors
 from ftcomp.io.samples_csv import read_samples, write_samples
-from ftcomp.model import GravityModel
 from ftcomp.paper import paper_poses
 from ftcomp.sim.cell import SimCell
 from ftcomp.sim.collect import record_with_truth
 from ftcomp.sim.scene import SceneConfig
 
 PAPER_TILT_RAD = (math.radians(-0.204), math.radians(-0.129))
-
-
-def _deviations_in_standard_errors(estimate, truth: GravityModel) -> dict[str, float]:
-    model, se = estimate.model, estimate.std_errors
-    pairs = {
-        "weight": (model.weight_N, truth.weight_N, se.weight_N),
-        "U": (model.tilt_U_rad, truth.tilt_U_rad, se.tilt_U_rad),
-        "V": (model.tilt_V_rad, truth.tilt_V_rad, se.tilt_V_rad),
-    }
-    for name in ("center_of_gravity_m", "force_bias_N", "torque_bias_Nm"):
-        for k in range(3):
-            pairs[f"{name}[{k}]"] = (
-                getattr(model, name)[k],
-                getattr(truth, name)[k],
-                getattr(se, name)[k],
-            )
-    return {name: abs(est - true) / s for name, (est, true, s) in pairs.items()}
 
 
 @pytest.mark.parametrize("method", ["paper", "joint"])
@@ -56,7 +38,7 @@ def test_calibration_recovers_the_simulated_truth_within_three_standard_errors(
     result = calibrate(read_samples(path), method=method)  # type: ignore[arg-type]
     expected_weight = 3.153 if gripper else 0.835
     assert truth.weight_N == pytest.approx(expected_weight, abs=1e-9)
-    deviations = _deviations_in_standard_errors(result, truth)
+    deviations = deviations_in_standard_errors(result, truth)
     # At the paper's noise level (one count) each estimate is off by noise alone: 3 SE.
     worst = max(deviations, key=deviations.__getitem__)
     assert deviations[worst] < 3.0, f"{worst} is {deviations[worst]:.2f} SE off: {deviations}"

@@ -30,7 +30,15 @@ from ftcomp.frames import tilt_from_gravity_in_base
 from ftcomp.model import GravityModel
 from ftcomp.samples import Samples
 
-__all__ = ["CONDITION_WARNING", "Calibration", "StandardErrors", "calibrate", "pose_means"]
+__all__ = [
+    "CONDITION_WARNING",
+    "Calibration",
+    "StandardErrors",
+    "calibrate",
+    "deviations_in_standard_errors",
+    "max_deviations_in_standard_errors",
+    "pose_means",
+]
 
 #: Condition number of the force regressor above which the poses are reported as too alike.
 CONDITION_WARNING = 30.0
@@ -314,3 +322,32 @@ def calibrate(
         condition_number=cond,
         warnings=tuple(warnings),
     )
+
+
+def deviations_in_standard_errors(
+    calibration: Calibration, truth: GravityModel
+) -> dict[str, float]:
+    """``|identified - true| / standard error`` of every identified number (scoring against a
+    known truth, e.g. the simulator's): keys ``tool_weight_N``, ``tilt_U_rad``, ``tilt_V_rad``
+    and ``center_of_gravity_m[k]``, ``force_bias_N[k]``, ``torque_bias_Nm[k]``."""
+    m, se = calibration.model, calibration.std_errors
+    out = {
+        "tool_weight_N": abs(m.weight_N - truth.weight_N) / se.weight_N,
+        "tilt_U_rad": abs(m.tilt_U_rad - truth.tilt_U_rad) / se.tilt_U_rad,
+        "tilt_V_rad": abs(m.tilt_V_rad - truth.tilt_V_rad) / se.tilt_V_rad,
+    }
+    for name in ("center_of_gravity_m", "force_bias_N", "torque_bias_Nm"):
+        est, tru, err = getattr(m, name), getattr(truth, name), getattr(se, name)
+        for k in range(3):
+            out[f"{name}[{k}]"] = float(abs(est[k] - tru[k]) / err[k])
+    return out
+
+
+def max_deviations_in_standard_errors(
+    calibration: Calibration, truth: GravityModel
+) -> dict[str, float]:
+    """The largest :func:`deviations_in_standard_errors` per parameter (vectors by their worst
+    component): ``tool_weight_N``, ``force_bias_N``, ``torque_bias_Nm``, ``center_of_gravity_m``."""
+    each = deviations_in_standard_errors(calibration, truth)
+    names = ("tool_weight_N", "force_bias_N", "torque_bias_Nm", "center_of_gravity_m")
+    return {n: max(v for k, v in each.items() if k.split("[")[0] == n) for n in names}

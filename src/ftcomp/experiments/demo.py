@@ -12,7 +12,7 @@ import json
 import math
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -22,7 +22,6 @@ from ftcomp import paper
 from ftcomp.calibration.identify import Calibration
 from ftcomp.errors import ParameterError
 from ftcomp.experiments.demo_gravity import (
-    DemoSettings,
     calibration_section,
     continuous_section,
     tables_section,
@@ -41,6 +40,43 @@ __all__ = ["MARKER_FILE", "DemoSettings", "prepare_output", "run_demo"]
 MARKER_FILE = ".ftcomp-demo"
 
 Advance = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class DemoSettings:
+    """What the demo runs.
+
+    Attributes:
+        samples_per_pose: readings per calibration pose (the paper: 500).
+        weighing_samples_per_pose: readings per pose when weighing the Table-4 loads.
+        continuous_duration_s: duration of the continuous orientation change [s].
+        k13_values_mm_per_N: the K1 sweep on the sponge, K2 fixed at the sponge's default.
+        k23_values_mm_per_s_N: the K2 sweep on the sponge, K1 fixed at the paper's 0.1 mm/N.
+        seed: seeds every sensor's noise.
+    """
+
+    samples_per_pose: int
+    weighing_samples_per_pose: int
+    continuous_duration_s: float
+    k13_values_mm_per_N: tuple[float, ...]
+    k23_values_mm_per_s_N: tuple[float, ...]
+    seed: int
+
+    @classmethod
+    def full(cls, seed: int) -> DemoSettings:
+        """The paper's settings: 500 readings per pose, three-value gain sweeps."""
+        return cls(500, 200, 4.0, (0.05, 0.1, 0.2), (0.5, 1.0, 2.0), seed)
+
+    @classmethod
+    def quick(cls, seed: int) -> DemoSettings:
+        """A shorter run with the same sections (for tests)."""
+        return cls(60, 30, 1.5, (0.05, 0.2), (1.0, 2.0), seed)
+
+    @property
+    def steps(self) -> int:
+        """Progress steps: 2 calibrations, 2 continuous-pose steps, 6 loads, placement runs."""
+        placement = 5 + len(self.k13_values_mm_per_N) + len(self.k23_values_mm_per_s_N)
+        return 2 + 2 + 6 + placement
 
 
 def _placement_section(

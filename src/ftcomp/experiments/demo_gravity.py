@@ -8,15 +8,18 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ftcomp import paper
-from ftcomp.calibration.identify import Calibration, calibrate
+from ftcomp.calibration.identify import (
+    Calibration,
+    calibrate,
+    max_deviations_in_standard_errors,
+)
 from ftcomp.experiments import gravity
 from ftcomp.io.atomic import atomic_write_text
 from ftcomp.io.calibration_json import calibration_to_dict, model_to_dict, save_calibration
@@ -26,46 +29,12 @@ from ftcomp.report.figures import plot_continuous_pose, plot_table3, plot_table4
 from ftcomp.report.html import Figure, Section, Table
 from ftcomp.samples import WRENCH_COLUMNS
 
-__all__ = ["DemoSettings", "calibration_section", "continuous_section", "tables_section"]
+if TYPE_CHECKING:
+    from ftcomp.experiments.demo import DemoSettings
+
+__all__ = ["calibration_section", "continuous_section", "tables_section"]
 
 Advance = Callable[[str], None]
-
-
-@dataclass(frozen=True)
-class DemoSettings:
-    """What the demo runs.
-
-    Attributes:
-        samples_per_pose: readings per calibration pose (the paper: 500).
-        weighing_samples_per_pose: readings per pose when weighing the Table-4 loads.
-        continuous_duration_s: duration of the continuous orientation change [s].
-        k13_values_mm_per_N: the K1 sweep on the sponge, K2 fixed at the sponge's default.
-        k23_values_mm_per_s_N: the K2 sweep on the sponge, K1 fixed at the paper's 0.1 mm/N.
-        seed: seeds every sensor's noise.
-    """
-
-    samples_per_pose: int
-    weighing_samples_per_pose: int
-    continuous_duration_s: float
-    k13_values_mm_per_N: tuple[float, ...]
-    k23_values_mm_per_s_N: tuple[float, ...]
-    seed: int
-
-    @classmethod
-    def full(cls, seed: int) -> DemoSettings:
-        """The paper's settings: 500 readings per pose, three-value gain sweeps."""
-        return cls(500, 200, 4.0, (0.05, 0.1, 0.2), (0.5, 1.0, 2.0), seed)
-
-    @classmethod
-    def quick(cls, seed: int) -> DemoSettings:
-        """A shorter run with the same sections (for tests)."""
-        return cls(60, 30, 1.5, (0.05, 0.2), (1.0, 2.0), seed)
-
-    @property
-    def steps(self) -> int:
-        """Progress steps: 2 calibrations, 2 continuous-pose steps, 6 loads, placement runs."""
-        placement = 5 + len(self.k13_values_mm_per_N) + len(self.k23_values_mm_per_s_N)
-        return 2 + 2 + 6 + placement
 
 
 def _vec(v: np.ndarray, digits: int = 4) -> str:
@@ -132,7 +101,10 @@ def calibration_section(
         ),
     ]
     joint = run.results["joint"]
-    truth_errors = _truth_errors(run.truth, run.results)
+    truth_errors = {
+        str(method): max_deviations_in_standard_errors(result, run.truth)
+        for method, result in run.results.items()
+    }
     metrics = {
         "paper_data": calibration_to_dict(paper_data),
         "simulation_truth": model_to_dict(run.truth),
@@ -186,28 +158,6 @@ def _fmt(value: Any) -> str:
     if isinstance(value, (float, int)):
         return f"{value:.4f}"
     return _vec(np.asarray(value))
-
-
-def _truth_errors(
-    truth: GravityModel, results: dict[Any, Calibration]
-) -> dict[str, dict[str, float]]:
-    out: dict[str, dict[str, float]] = {}
-    for method, r in results.items():
-        m, se = r.model, r.std_errors
-        z = {"tool_weight_N": abs(m.weight_N - truth.weight_N) / se.weight_N}
-        for name, est, tru, err in (
-            ("force_bias_N", m.force_bias_N, truth.force_bias_N, se.force_bias_N),
-            ("torque_bias_Nm", m.torque_bias_Nm, truth.torque_bias_Nm, se.torque_bias_Nm),
-            (
-                "center_of_gravity_m",
-                m.center_of_gravity_m,
-                truth.center_of_gravity_m,
-                se.center_of_gravity_m,
-            ),
-        ):
-            z[name] = float(np.max(np.abs(est - tru) / err))
-        out[str(method)] = z
-    return out
 
 
 def continuous_section(

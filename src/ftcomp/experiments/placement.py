@@ -136,7 +136,7 @@ class _PlacementStep:
         R = first.R_base_sensor
         self.state = self.controller.initial_state(w0, R)
         self.decision_filter = LowPassFilter(config.decision_cutoff_hz, dt, order=1, channels=1)
-        f0 = self._along_gravity(w0, R)
+        f0 = float(-(self.up @ R) @ w0[:3])
         self.decision_state = self.decision_filter.initial_state([f0])
         self.f_dec = f0
         self.p_ref = first.p_base_sensor
@@ -148,24 +148,20 @@ class _PlacementStep:
         self.placed_at: float | None = None
         self.decision_index: int | None = None
 
-    def _along_gravity(self, wrench: NDArray[np.float64], R: NDArray[np.float64]) -> float:
-        """Component against ``up`` of the wrench's force, in the base frame [N]."""
-        return float(-(R @ wrench[:3]) @ self.up)
-
     def descent(self, p: NDArray[np.float64]) -> float:
         """How far the sensor has gone down since the start [m]."""
         return float((self.p_ref - p) @ self.up)
 
-    def log(self, r: Reading, velocity: float, f_filt: float) -> None:
+    def log(self, r: Reading, velocity: float, f_filt: float, descent: float | None = None) -> None:
         """Append one row of :data:`COLUMNS`."""
-        R = r.R_base_sensor
+        down_sensor = -(self.up @ r.R_base_sensor)  # gravity's direction, sensor frame
         self.rows.append(
             (
                 (r.now_ns - self.t0_ns) * 1e-9,
-                self.descent(r.p_base_sensor) * 1e3,
+                (self.descent(r.p_base_sensor) if descent is None else descent) * 1e3,
                 velocity * 1e3,
-                self._along_gravity(r.wrench_raw_sensor, R),
-                self._along_gravity(r.wrench_contact_sensor, R),
+                float(down_sensor @ r.wrench_raw_sensor[:3]),
+                float(down_sensor @ r.wrench_contact_sensor[:3]),
                 f_filt,
                 self.cell.true_contact_force_N(),
             )
@@ -184,14 +180,14 @@ class _PlacementStep:
         self.state, twist = self.controller.step(
             self.state, r.t_sample_ns * 1e-9, w_c, R, now, self.dt, nominal
         )
-        f_comp = self._along_gravity(w_c, R)
+        f_comp = float(-(self.up @ R) @ w_c[:3])
         if math.isfinite(f_comp):
             self.decision_state, f_dec = self.decision_filter.step(self.decision_state, [f_comp])
             self.f_dec = float(f_dec[0])
         f_filt = self.f_dec if math.isfinite(f_comp) else math.nan
         velocity = float((self.p_prev - p) @ self.up) / self.dt if self.rows else 0.0
         self.p_prev = p
-        self.log(r, velocity, f_filt)
+        self.log(r, velocity, f_filt, descent)
         if self.state.stop_reason is not None:
             self.outcome = self.state.stop_reason.value
             return None

@@ -16,51 +16,40 @@ velocity feedforward, as an industrial controller's servo loop would do.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from types import TracebackType
 from typing import Final
 
 import mujoco
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
-from ftcomp.errors import ParameterError, SimulationError, UnreachablePoseError
-from ftcomp.hardware.protocols import PoseSample, WrenchSample
-from ftcomp.model import GravityModel
+from ftcomp.errors import ParameterError, SimulationError
+from ftcomp.hardware.protocols import PoseSample
 from ftcomp.sim.arm import ARM_JOINT_NAMES
-from ftcomp.sim.ik import DifferentialIK, solve_pose
+from ftcomp.sim.gripper import SURFACE_GEOMS, GripperAndSurfaces
+from ftcomp.sim.ik import DifferentialIK
+from ftcomp.sim.motion import HOME_Q_RAD, ArmMotion
 from ftcomp.sim.scene import NAMES, SceneConfig, build_mjcf
 from ftcomp.sim.sensor import SensorSpec, SimWrenchSensor
 
 __all__ = ["COLLECTION_POSITION_BASE_M", "HOME_Q_RAD", "SimCell"]
 
-#: Start configuration: tool pointing straight down in front of the robot [rad].
-HOME_Q_RAD: Final = (0.0, 0.0, 0.6, 0.0, math.pi / 2 - 0.6, 0.0)
 #: Where the sensor origin is held for static calibration readings, base frame [m]: in front of
 #: the robot, high enough above the table for every orientation of the paper's poses.
 COLLECTION_POSITION_BASE_M: Final = (0.45, 0.0, 0.42)
 #: Damping of the control-cycle differential IK [m or rad]: negligible away from singularities.
 _DLS_DAMPING: Final = 1e-3
+#: The control-cycle IK reuses its Jacobian until a joint has moved this far [rad].
+_JACOBIAN_REFRESH_RAD: Final = 1e-3
 #: Joint speed limit of the velocity interface [rad/s] (the C4's slowest axes reach ~7 rad/s).
 _MAX_JOINT_SPEED: Final = 3.0
-_SURFACE_GEOMS: Final = ("floor", "table", "book", "sponge_top")
 
 #: Consecutive still cycles that make :meth:`SimCell.settle` call the cell at rest.
 _STILL_CYCLES: Final = 20
 _BADQACC: Final = int(mujoco.mjtWarning.mjWARN_BADQACC)
 
-CycleCallback = Callable[["SimCell"], None]
 
-
-def _min_jerk(tau: float) -> tuple[float, float]:
-    """Minimum-jerk profile s(tau) and ds/dtau on tau in [0, 1]."""
-    s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau * tau)
-    ds = 30.0 * tau * tau * (1.0 - tau) ** 2
-    return s, ds
-
-
-class SimCell:
+class SimCell(ArmMotion, GripperAndSurfaces):
     """A MuJoCo robot cell implementing the :class:`~ftcomp.hardware.protocols.Robot` protocol.
 
     Args:
@@ -116,7 +105,7 @@ class SimCell:
         self._load_dadr = int(m.jnt_dofadr[m.body_jntadr[self._load]]) if self._load >= 0 else -1
         self._surface_geoms = frozenset(
             gid
-            for name in _SURFACE_GEOMS
+            for name in SURFACE_GEOMS
             if (gid := mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)) >= 0
         )
         sponge = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, NAMES["sponge_joint"])
@@ -131,7 +120,9 @@ class SimCell:
         self._qd_cmd = np.zeros(6)
         self._twist_world = np.zeros(6)
         self._twist_active = False
-        self._dik = DifferentialIK(m, self._site, _DLS_DAMPING)
+        self._dik = DifferentialIK(
+            m, self._site, _DLS_DAMPING, refresh_rad=_JACOBIAN_REFRESH_RAD, chain=self._qs
+        )
         self._ik_rng = np.random.default_rng(20200301)
         d = self._data
         d.qpos[self._qs] = q0
@@ -182,11 +173,6 @@ class SimCell:
     def q_command_rad(self) -> NDArray[np.float64]:
         """Commanded joint positions [rad], shape (6,)."""
         return self._q_cmd.copy()
-
-    @property
-    def holding(self) -> bool:
-        """Whether the gripper holds the load (grasp weld active)."""
-        return self._weld >= 0 and bool(self._data.eq_active[self._weld])
 
     # ----------------------------------------------------------------- Robot protocol
     def __enter__(self) -> SimCell:
@@ -257,108 +243,6 @@ class SimCell:
             self._q_cmd = q
         self._physics()
 
-    def move_joints(
-        self,
-        q_rad: ArrayLike,
-        duration_s: float,
-        *,
-        on_cycle: CycleCallback | None = None,
-    ) -> None:
-        """Blocking minimum-jerk joint move to ``q_rad`` [rad] in ``duration_s`` [s].
-
-        ``on_cycle(cell)``, if given, runs after every control cycle (to record readings).
-        A commanded twist is stopped first.
-
-        Raises:
-            ParameterError: ``q_rad`` outside the joint ranges or ``duration_s`` not positive.
-        """
-        q1 = np.array(q_rad, dtype=float)
-        self._check_joints(q1, "q_rad")
-        if not math.isfinite(duration_s) or duration_s <= 0.0:
-            raise ParameterError(f"duration_s must be finite and > 0, got {duration_s}")
-        self.stop()
-        q0 = self._q_cmd.copy()
-        n = max(1, round(duration_s / self._period))
-        T = n * self._period
-        for i in range(1, n + 1):
-            s, ds = _min_jerk(i / n)
-            self._q_cmd = q0 + (q1 - q0) * s
-            self._qd_cmd = (q1 - q0) * (ds / T)
-            self._physics()
-            if on_cycle is not None:
-                on_cycle(self)
-        self._q_cmd = q1
-        self._qd_cmd = np.zeros(6)
-
-    def move_pose(
-        self,
-        p_base_sensor: ArrayLike,
-        R_base_sensor: ArrayLike,
-        duration_s: float,
-        *,
-        on_cycle: CycleCallback | None = None,
-        label: str = "",
-    ) -> None:
-        """Blocking move of the sensor frame to a pose: inverse kinematics, then a joint move.
-
-        Args:
-            p_base_sensor: target position [m], base frame, shape (3,).
-            R_base_sensor: target orientation, shape (3, 3).
-            duration_s: duration of the move [s].
-            on_cycle: as in :meth:`move_joints`.
-            label: names the pose in an error message (e.g. ``"pose 4"``).
-
-        Raises:
-            UnreachablePoseError: no joint configuration within the joint ranges reaches it.
-        """
-        q = self.solve_ik(p_base_sensor, R_base_sensor, label=label)
-        self.move_joints(q, duration_s, on_cycle=on_cycle)
-
-    # ----------------------------------------------------------------- kinematics
-    def solve_ik(
-        self, p_base_sensor: ArrayLike, R_base_sensor: ArrayLike, *, label: str = ""
-    ) -> NDArray[np.float64]:
-        """Joint positions [rad] putting the sensor frame at a base-frame pose.
-
-        Tries the current command first (the nearest solution), then fixed and random seeds
-        (a fixed generator: the same pose gives the same answer whatever the noise seed).
-
-        Raises:
-            UnreachablePoseError: no seed converges within the joint ranges.
-        """
-        p = np.asarray(p_base_sensor, dtype=float)
-        R = np.asarray(R_base_sensor, dtype=float)
-        finite = bool(np.isfinite(p).all() and np.isfinite(R).all())
-        if p.shape != (3,) or R.shape != (3, 3) or not finite:
-            raise ParameterError(f"{label or 'pose'}: need p (3,) and R (3, 3), finite")
-        if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
-            raise ParameterError(f"{label or 'pose'}: R_base_sensor is not a rotation matrix")
-        Rwb = self._R_world_base
-        span = self._upper - self._lower
-        seeds = [self._q_cmd, np.array(HOME_Q_RAD)]
-        seeds += [self._lower + span * self._ik_rng.random(6) for _ in range(30)]
-        mujoco.mj_copyData(self._scratch, self._model, self._data)
-        q = solve_pose(
-            self._model,
-            self._scratch,
-            self._site,
-            self._qpos_adr,
-            self._dof_adr,
-            Rwb @ p,
-            Rwb @ R,
-            seeds,
-            self._lower,
-            self._upper,
-        )
-        if q is None:
-            euler = Rotation.from_matrix(R).as_euler("ZYX", degrees=True)
-            raise UnreachablePoseError(
-                f"{label or 'pose'} is unreachable: no joint configuration within the joint "
-                f"ranges puts the sensor at p_base={np.round(p, 4).tolist()} m, "
-                f"(alpha, beta, gamma)={np.round(euler, 3).tolist()} deg"
-            )
-        return q
-
     # ----------------------------------------------------------------- physics and sensing
     def _check_joints(self, q: NDArray[np.float64], name: str) -> None:
         if q.shape != (6,) or not np.isfinite(q).all():
@@ -423,145 +307,3 @@ class SimCell:
         the sensor feels the opposite. No bias, noise, quantisation or saturation.
         """
         return np.negative(self._data.sensordata[0:6])
-
-    def record_readings(self, n_samples: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Keep the current command and record the next ``n_samples`` sensor outputs.
-
-        Physics runs on while recording; each output tick takes the latest physics state.
-
-        Returns:
-            ``(t [s] (N,), wrench_sensor [N, N*m] (N, 6))``.
-        """
-        if n_samples < 1:
-            raise ParameterError(f"n_samples must be >= 1, got {n_samples}")
-        self._sensor.read_new()  # only readings from now on
-        samples: list[WrenchSample] = []
-        while len(samples) < n_samples:
-            self.wait_cycle()
-            samples.extend(self._sensor.read_new())
-        kept = samples[:n_samples]
-        t = np.array([s.t_ns for s in kept], dtype=float) * 1e-9
-        return t, np.array([s.wrench_sensor for s in kept])
-
-    def true_gravity_model(self) -> GravityModel:
-        """The truth calibration should find now: what hangs below the sensor, its bias, tilt.
-
-        Weight and centre of gravity of the sensing end, the gripper and the held load, from
-        the MuJoCo model's masses and the current body positions; bias from the sensor spec.
-        """
-        d = self._data
-        bodies = [self._sensing_end]
-        if self._gripper >= 0:
-            bodies.append(self._gripper)
-        if self.holding:
-            bodies.append(self._load)
-        mass = self._model.body_mass[bodies]
-        total = float(mass.sum())
-        com_world = mass @ d.xipos[bodies] / total
-        R_ws = d.site_xmat[self._site].reshape(3, 3)
-        cog = R_ws.T @ (com_world - d.site_xpos[self._site])
-        return GravityModel(
-            total * self._gravity,
-            cog,
-            self._sensor_spec.force_bias_N,
-            self._sensor_spec.torque_bias_Nm,
-            tilt_U_rad=self._config.tilt_U_rad,
-            tilt_V_rad=self._config.tilt_V_rad,
-        )
-
-    # ----------------------------------------------------------------- grasping and placement
-    def _require_load(self, what: str) -> None:
-        if self._load < 0:
-            raise SimulationError(f"cannot {what}: the scene has no load (SceneConfig.load)")
-
-    def grasp(self) -> None:
-        """Take the load into the gripper: put it at the grasp point and switch the weld on.
-
-        The load's centre sits at ``ToolSpec.grasp_point_m``, its axes along the sensor's.
-        Grasp in free air (the load is moved there, whatever is in the way).
-        """
-        self._require_load("grasp")
-        m, d = self._model, self._data
-        R_ws = d.site_xmat[self._site].reshape(3, 3)
-        pos = d.site_xpos[self._site] + R_ws @ self._config.tool.grasp_point_m
-        quat = np.empty(4)
-        mujoco.mju_mat2Quat(quat, d.site_xmat[self._site])
-        a = self._load_qadr
-        d.qpos[a : a + 3] = pos
-        d.qpos[a + 3 : a + 7] = quat
-        d.qvel[self._load_dadr : self._load_dadr + 6] = 0.0
-        # Weld data: anchor (3), relative pose of the load in the gripper frame (pos 3, quat 4).
-        # The gripper frame is the sensor frame.
-        m.eq_data[self._weld, 0:3] = 0.0
-        m.eq_data[self._weld, 3:6] = self._config.tool.grasp_point_m
-        m.eq_data[self._weld, 6:10] = (1.0, 0.0, 0.0, 0.0)
-        d.eq_active[self._weld] = 1
-        mujoco.mj_forward(m, d)
-
-    def release(self) -> None:
-        """Open the gripper: switch the grasp weld off (the load is then free)."""
-        self._require_load("release")
-        self._data.eq_active[self._weld] = 0
-
-    def true_contact_force_world_N(self) -> NDArray[np.float64]:
-        """Total force the surfaces (table, book, sponge, floor) exert on the load [N], world."""
-        total = np.zeros(3)
-        if self._load_geom < 0:
-            return total
-        m, d = self._model, self._data
-        c6 = np.empty(6)
-        for i in range(d.ncon):
-            c = d.contact[i]
-            g1, g2 = int(c.geom1), int(c.geom2)
-            if self._load_geom == g1:
-                other, sign = g2, -1.0
-            elif self._load_geom == g2:
-                other, sign = g1, 1.0
-            else:
-                continue
-            if other not in self._surface_geoms:
-                continue
-            mujoco.mj_contactForce(m, d, i, c6)
-            total += sign * (c.frame.reshape(3, 3).T @ c6[:3])
-        return total
-
-    def true_contact_force_N(self) -> float:
-        """Vertical force the table and the surface on it push up on the load [N] (>= 0).
-
-        The sum of MuJoCo touch sensors over the top faces (normal contact force; the tops
-        are level, so it is the vertical force). Cheap enough for every control cycle.
-        """
-        return float(self._data.sensordata[6:].sum())
-
-    def surface_compression_m(self) -> float:
-        """How far the sponge is pressed in [m] (0 for other surfaces)."""
-        if self._sponge_qadr < 0:
-            return 0.0
-        return float(-self._data.qpos[self._sponge_qadr])
-
-    def surface_top_height_m(self) -> float:
-        """World height of the uncompressed placement surface's top [m]."""
-        return self._config.surface_top_height_m
-
-    def placement_pose(self, clearance_m: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The sensor pose (base frame) holding the load ``clearance_m`` above the surface.
-
-        Tool pointing straight down (sensor z along world -z, sensor x along world x), above
-        the table's placement spot; the load's bottom ``clearance_m`` [m] above the surface top.
-        """
-        self._require_load("compute a placement pose")
-        if not math.isfinite(clearance_m):
-            raise ParameterError(f"clearance_m must be finite, got {clearance_m}")
-        load = self._config.load
-        assert load is not None  # _require_load checked it
-        reach_down = float(self._config.tool.grasp_point_m[2] + load.half_size_m[2])
-        cx, cy = self._config.table.center_xy_m
-        p_world = np.array([cx, cy, self.surface_top_height_m() + clearance_m + reach_down])
-        R_world_sensor = np.diag([1.0, -1.0, -1.0])
-        Rwb = self._R_world_base
-        return Rwb.T @ p_world, Rwb.T @ R_world_sensor
-
-    def hold_above_surface(self, clearance_m: float, duration_s: float = 1.0) -> None:
-        """Move so the load would be ``clearance_m`` [m] above the surface, then settle."""
-        p, R = self.placement_pose(clearance_m)
-        self.move_pose(p, R, duration_s, label=f"placement pose {clearance_m * 1000:.1f} mm up")

@@ -50,13 +50,31 @@ class DifferentialIK:
     site's kinematic chain (a free load, the sponge) have zero columns, so they get zero
     velocity and the result is the arm's ``dq`` padded with zeros.
 
+    With ``refresh_rad > 0`` the Jacobian and its factorisation are kept while the chain's joints
+    (``qpos[chain]``) stay within ``refresh_rad`` of where they were computed: over 1 mrad the
+    Jacobian changes by about 0.1 %, far below the servo's tracking error, and the 1 kHz loop
+    saves four of its six MuJoCo calls on most cycles.
+
     Args:
         model: the MuJoCo model.
         site_id: the site whose origin and frame the twist moves.
         damping: lambda [m or rad], as in :func:`dls_joint_velocity`.
+        refresh_rad: recompute once a chain joint has moved this far [rad]; 0: every call.
+        chain: the ``qpos`` slice of the joints that move the site (with ``refresh_rad``).
     """
 
-    def __init__(self, model: mujoco.MjModel, site_id: int, damping: float) -> None:
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        site_id: int,
+        damping: float,
+        *,
+        refresh_rad: float = 0.0,
+        chain: slice = slice(0, 0),
+    ) -> None:
+        self._refresh = refresh_rad
+        self._chain = chain
+        self._q_factored: NDArray[np.float64] | None = None
         self._model = model
         self._site = site_id
         self._jac = np.zeros((6, model.nv))
@@ -73,10 +91,16 @@ class DifferentialIK:
         """``dq`` [rad/s or m/s] for every degree of freedom, shape (nv,) (an internal buffer:
         copy it to keep it), realising ``twist_world`` ``[v, w]`` of the site at ``data``'s state.
         """
-        mujoco.mj_jacSite(self._model, data, self._jacp, self._jacr, self._site)
-        mujoco.mju_mulMatMatT(self._A, self._jac, self._jac)
-        mujoco.mju_addTo(self._A.reshape(-1), self._damping_I.reshape(-1))
-        mujoco.mju_cholFactor(self._A, 0.0)
+        q = data.qpos[self._chain]
+        fresh = self._q_factored is not None and (
+            float(np.abs(q - self._q_factored).max()) < self._refresh
+        )
+        if not fresh:
+            mujoco.mj_jacSite(self._model, data, self._jacp, self._jacr, self._site)
+            mujoco.mju_mulMatMatT(self._A, self._jac, self._jac)
+            mujoco.mju_addTo(self._A.reshape(-1), self._damping_I.reshape(-1))
+            mujoco.mju_cholFactor(self._A, 0.0)
+            self._q_factored = q.copy() if self._refresh > 0.0 else None
         mujoco.mju_cholSolve(self._x, self._A, twist_world)
         mujoco.mju_mulMatTVec(self._qd, self._jac, self._x)
         return self._qd
