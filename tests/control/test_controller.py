@@ -4,14 +4,21 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import pickle
 
 import numpy as np
 import pytest
+from scipy import signal
+from scipy.spatial.transform import Rotation
 
 from ftcomp.control import (
     AdmittanceController,
+    AdmittanceLaw,
     CombinedLaw,
+    ControllerState,
     LowPassFilter,
+    MassDamperSpringLaw,
+    PositionLaw,
     SafetyLimits,
     StopReason,
     VelocityLaw,
@@ -122,3 +129,254 @@ def test_step_replays_a_log_identically() -> None:
             twists.append(twist)
         out.append(np.array(twists))
     np.testing.assert_array_equal(out[0], out[1])
+
+
+# --- The lean step against a straightforward recomputation, and over faults ---------------------
+
+
+def _arrays_of(state: ControllerState) -> list[np.ndarray]:
+    law = state.law
+    return [
+        law.offset,
+        law.twist,
+        law.wrench_error,
+        state.filter,
+        state.wrench_filtered_sensor,
+        state.twist_base,
+        state.travel_base,
+    ]
+
+
+def _rotate6(R: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Each row of v (N, 6) rotated by its R (N, 3, 3), force and torque alike."""
+    return np.concatenate(
+        [np.einsum("nij,nj->ni", R, v[:, :3]), np.einsum("nij,nj->ni", R, v[:, 3:])], axis=1
+    )
+
+
+def _straightforward(
+    ctrl: AdmittanceController,
+    w0: np.ndarray,
+    R0: np.ndarray,
+    w_log: np.ndarray,
+    R_log: np.ndarray,
+    nominal_log: np.ndarray | None,
+    dt: float,
+) -> dict[str, np.ndarray]:
+    """The no-fault path written out on the whole log: sosfilt, the law, np.clip, a sum."""
+    filt = ctrl.wrench_filter
+    if filt is None:
+        w_filt, zf = w_log, np.zeros((0, 2, 6))
+    else:
+        w_filt, zf = signal.sosfilt(np.array(filt.sos), w_log, axis=0, zi=filt.initial_state(w0))
+    base = ctrl.frame == "base"
+    e = (_rotate6(R_log, w_filt) if base else w_filt) - ctrl.wrench_desired
+    e_start = (_rotate6(R0[None], w0[None])[0] if base else w0) - ctrl.wrench_desired
+    law = ctrl.law
+    if isinstance(law, (CombinedLaw, PositionLaw, VelocityLaw)):  # the closed form, Eq. 24-27
+        k1 = getattr(law, "k1_m_per_N", np.zeros(6))
+        k2 = getattr(law, "k2_m_per_s_N", np.zeros(6))
+        s = np.diag(law.selection)
+        de_dt = np.diff(np.vstack([e_start, e]), axis=0) / dt
+        twist_law = s * (k1 * de_dt + k2 * e)
+        offset = np.cumsum(twist_law * dt, axis=0)
+    else:  # any other law: its own step
+        state, rows = law.initial_state(e_start), []
+        for e_k in e:
+            state, twist_k = law.step(state, e_k, dt)
+            rows.append((state.offset, twist_k))
+        offset, twist_law = (np.array(x) for x in zip(*rows, strict=True))
+    cmd = twist_law if base else _rotate6(R_log, twist_law)
+    if nominal_log is not None:
+        cmd = cmd + nominal_log
+    limits = ctrl.limits
+    twist, prev = [], np.zeros(6)
+    for c in cmd:
+        v = np.clip(c, -limits.max_twist, limits.max_twist)
+        prev = np.clip(v, prev - limits.max_twist_rate * dt, prev + limits.max_twist_rate * dt)
+        twist.append(prev)
+    twist_base = np.array(twist)
+    return {
+        "w_filt": w_filt,
+        "zf": zf,
+        "e": e,
+        "twist_law": twist_law,
+        "offset": offset,
+        "twist_base": twist_base,
+        "travel": np.cumsum(twist_base * dt, axis=0),
+    }
+
+
+_LAWS: dict[str, AdmittanceLaw] = {
+    "combined": CombinedLaw([1e-4, 2e-4, 1e-4, 1e-3, 1e-3, 2e-3], 2e-3, "x z rz"),
+    "position": PositionLaw(3e-4, "y z"),
+    "velocity": VelocityLaw([1e-3, 2e-3, 3e-3, 1e-2, 1e-2, 1e-2], [1, 1, 1, 0, 1, 0]),
+    "mass-damper-spring": MassDamperSpringLaw(2.0, 40.0, 100.0, "z rx"),
+}
+
+
+@pytest.mark.parametrize("law_name", list(_LAWS))
+@pytest.mark.parametrize("frame", ["base", "sensor"])
+@pytest.mark.parametrize("extras", ["plain", "nominal+desired", "unfiltered"])
+def test_no_fault_step_equals_sosfilt_and_the_law_written_out(
+    law_name: str, frame: str, extras: str
+) -> None:
+    rng = np.random.default_rng(11)
+    n = 400
+    limits = SafetyLimits(
+        max_twist=[0.02, 0.02, 0.01, 0.2, 0.2, 0.2],
+        max_twist_rate=[0.5, 0.5, 0.2, 5.0, 5.0, 5.0],  # active at the start and on spikes
+        max_travel=1.0,
+        max_force_N=100.0,
+        max_torque_Nm=10.0,
+        stale_after_s=0.005,
+    )
+    desired = rng.normal(size=6) if extras == "nominal+desired" else np.zeros(6)
+    ctrl = AdmittanceController(
+        law=_LAWS[law_name],
+        wrench_filter=None if extras == "unfiltered" else LowPassFilter(30.0, DT, order=4),
+        limits=limits,
+        frame=frame,  # type: ignore[arg-type]
+        wrench_desired=desired,
+    )
+    scale = np.array([1.0, 1.0, 1.0, 0.1, 0.1, 0.1])  # [N, N*m]
+    ramp = np.linspace(0.0, 1.0, n)[:, None] * rng.normal(scale=5.0 * scale, size=6)
+    w_log = LOAD_SENSOR + ramp + rng.normal(scale=0.3 * scale, size=(n, 6))
+    R_log = Rotation.random(n, rng=rng).as_matrix()  # a new orientation every period
+    nominal = rng.normal(scale=0.005, size=(n, 6)) if extras == "nominal+desired" else None
+    w0, R0 = w_log[0] + 0.1, R_log[0]
+    expected = _straightforward(ctrl, w0, R0, w_log, R_log, nominal, DT)
+
+    state = ctrl.initial_state(w0, R0)
+    got: dict[str, list[np.ndarray]] = {k: [] for k in expected if k != "zf"}
+    for k in range(n):
+        nominal_k = None if nominal is None else nominal[k]
+        state, twist = ctrl.step(state, k * DT, w_log[k], R_log[k], k * DT + 2e-4, DT, nominal_k)
+        assert state.stop_reason is None
+        assert twist is state.twist_base
+        for key, value in (
+            ("w_filt", state.wrench_filtered_sensor),
+            ("e", state.law.wrench_error),
+            ("twist_law", state.law.twist),
+            ("offset", state.law.offset),
+            ("twist_base", twist),
+            ("travel", state.travel_base),
+        ):
+            got[key].append(value)
+    for key, rows in got.items():
+        # The same arithmetic up to summation order (rotation, cumulative sums): 1e-12 holds.
+        np.testing.assert_allclose(rows, expected[key], rtol=0, atol=1e-12, err_msg=key)
+    np.testing.assert_allclose(state.filter, expected["zf"], rtol=0, atol=1e-12)
+    assert np.ptp(np.array(got["twist_base"])[:, 2]) > 0  # the command did move
+
+
+def _faulty_log(
+    fault: str, n: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """Stamps, wrenches and robot clock of a noisy run with tolerated repeats and one fault.
+
+    Returns ``(t_sample, wrench, now, k_fault)``; ``k_fault`` is where the stop must happen
+    (-1 for "travel": wherever the travel runs out).
+    """
+    t = np.arange(n) * DT
+    wrench = LOAD_SENSOR + rng.normal(scale=[0.2, 0.2, 0.2, 0.02, 0.02, 0.02], size=(n, 6))
+    for k in rng.choice(np.arange(20, n - 20), size=8, replace=False):
+        t[k] = t[k - 1]  # the sensor missed a beat: a tolerated repeat
+    now = np.arange(n) * DT + 3e-4
+    k_fault = n // 2
+    if fault == "nan":
+        wrench[k_fault, rng.integers(6)] = math.nan
+    elif fault == "repeat":
+        t[k_fault - 2 : k_fault + 1] = t[k_fault - 3]  # three in a row, two are tolerated
+    elif fault == "force":
+        wrench[k_fault, :3] = [20.0, -20.0, 25.0]
+    elif fault == "torque":
+        wrench[k_fault, 3:] = [3.5, 0.0, 0.0]
+    elif fault == "stale":
+        now[k_fault:] += 0.01
+    else:
+        k_fault = -1
+    return t, wrench, now, k_fault
+
+
+@pytest.mark.parametrize(
+    ("fault", "reason"),
+    [
+        ("nan", StopReason.NON_FINITE_SAMPLE),
+        ("repeat", StopReason.REPEATED_SAMPLE),
+        ("force", StopReason.FORCE_LIMIT),
+        ("torque", StopReason.TORQUE_LIMIT),
+        ("stale", StopReason.STALE_SAMPLE),
+        ("travel", StopReason.TRAVEL_LIMIT),
+    ],
+)
+@pytest.mark.parametrize("frame", ["base", "sensor"])
+def test_a_seeded_run_with_faults_replays_exactly_and_never_writes_into_a_state(
+    fault: str, reason: StopReason, frame: str
+) -> None:
+    rng = np.random.default_rng(5)
+    n = 300
+    t, wrench, now, k_fault = _faulty_log(fault, n, rng)
+    R = Rotation.from_euler("xyz", [178.0, 4.0, 30.0], degrees=True).as_matrix()
+    max_travel_z = 1e-3 if fault == "travel" else 0.05  # the law moves at about 10 mm/s
+    limits = dataclasses.replace(
+        LIMITS, max_travel=[0.05, 0.05, max_travel_z, 0.1, 0.1, 0.1], max_repeated_samples=2
+    )
+    ctrl = dataclasses.replace(_controller(frame), limits=limits)
+    nominal = np.array([1e-3, 0.0, -2e-3, 0.0, 0.0, 0.01])
+
+    runs = []
+    for _ in range(2):
+        state = ctrl.initial_state(wrench[0], R)
+        trace = []
+        for k in range(n):
+            before = [a.copy() for a in _arrays_of(state)]
+            watchdog = state.watchdog
+            new, twist = ctrl.step(state, t[k], wrench[k], R, now[k], DT, nominal)
+            for a, b in zip(_arrays_of(state), before, strict=True):
+                np.testing.assert_array_equal(a, b)  # the step never writes into its input
+            assert state.watchdog == watchdog
+            trace.append((new.stop_reason, twist.copy(), *[a.copy() for a in _arrays_of(new)]))
+            state = new
+        runs.append(trace)
+
+    stops = [k for k, row in enumerate(runs[0]) if row[0] is not None]
+    assert stops and stops[-1] == n - 1  # latched to the end
+    k_stop = stops[0]
+    if k_fault >= 0:
+        assert k_stop == k_fault
+    else:
+        assert 50 < k_stop < 250
+    assert all(runs[0][k][0] is reason for k in stops)
+    assert not any(np.any(runs[0][k][1]) for k in stops)  # zero twist from the faulty period on
+    assert np.any(runs[0][k_stop - 1][1])  # it was moving
+    for row_a, row_b in zip(*runs, strict=True):  # replay: bit for bit
+        assert row_a[0] is row_b[0]
+        for a, b in zip(row_a[1:], row_b[1:], strict=True):
+            np.testing.assert_array_equal(a, b)
+
+
+def test_step_raises_on_a_wrong_shape_or_period_not_on_bad_data() -> None:
+    ctrl = _controller()
+    state = ctrl.initial_state(LOAD_SENSOR, R_DOWN)
+    with pytest.raises(ParameterError, match=r"wrench_contact_sensor must have shape \(6,\)"):
+        ctrl.step(state, 0.0, LOAD_SENSOR[:5], R_DOWN, 0.0, DT)
+    with pytest.raises(ParameterError, match=r"R_base_sensor must have shape \(3, 3\)"):
+        ctrl.step(state, 0.0, LOAD_SENSOR, R_DOWN[:2], 0.0, DT)
+    with pytest.raises(ParameterError, match="dt must be > 0"):
+        ctrl.step(state, 0.0, LOAD_SENSOR, R_DOWN, 0.0, 0.0)
+    huge = np.array([1e308, 1e308, 0.0, 0.0, 0.0, 0.0])  # finite, though its sum is not
+    stopped, twist = ctrl.step(state, 0.0, huge, R_DOWN, 0.0, DT)
+    assert stopped.stop_reason is StopReason.FORCE_LIMIT and not np.any(twist)
+
+
+def test_a_controller_survives_pickling_with_its_prepared_constants() -> None:
+    ctrl = _controller("sensor")
+    copy = pickle.loads(pickle.dumps(ctrl))
+    state = ctrl.initial_state(LOAD_SENSOR, R_DOWN)
+    for k in range(20):
+        w = LOAD_SENSOR + 0.1 * k
+        new, twist = ctrl.step(state, k * DT, w, R_DOWN, k * DT, DT)
+        _, twist_copy = copy.step(state, k * DT, w, R_DOWN, k * DT, DT)
+        np.testing.assert_array_equal(twist, twist_copy)
+        state = new

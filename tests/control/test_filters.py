@@ -51,3 +51,50 @@ def test_initial_state_is_steady_at_x0() -> None:
 def test_filter_raises_on_cutoff_above_nyquist() -> None:
     with pytest.raises(ParameterError, match=r"cutoff_hz must be in \(0, 500\) Hz"):
         LowPassFilter(cutoff_hz=600.0, period_s=1e-3)
+
+
+@pytest.mark.parametrize("order", [1, 2, 5])
+def test_step_scalar_equals_sosfilt_and_step_on_one_channel(order: int) -> None:
+    filt = LowPassFilter(cutoff_hz=2.0, period_s=1e-3, order=order, channels=1)
+    rng = np.random.default_rng(2)
+    x = 3.0 + rng.normal(size=800)
+    zi0 = filt.initial_state([x[0]])
+    y_ref, zf = signal.sosfilt(np.array(filt.sos), x, zi=zi0[:, :, 0])
+    state = filt.initial_state_scalar(x[0])
+    np.testing.assert_array_equal(state, zi0.ravel())
+    z_array, ys, ys_array = zi0, [], []
+    for value in x:
+        state, y = filt.step_scalar(state, value)
+        z_array, y_array = filt.step(z_array, [value])
+        ys.append(y)
+        ys_array.append(y_array[0])
+    assert isinstance(state, tuple) and isinstance(ys[0], float)
+    np.testing.assert_allclose(ys, y_ref, atol=1e-12)  # same arithmetic as sosfilt
+    np.testing.assert_array_equal(ys, ys_array)  # and exactly that of step
+    np.testing.assert_allclose(state, zf.ravel(), atol=1e-12)
+    np.testing.assert_array_equal(state, z_array.ravel())
+
+
+@pytest.mark.parametrize("channels", [1, 3])
+def test_step_equals_sosfilt_on_any_number_of_channels(channels: int) -> None:
+    filt = LowPassFilter(cutoff_hz=20.0, period_s=1e-3, order=3, channels=channels)
+    x = np.random.default_rng(4).normal(size=(300, channels))
+    zi0 = filt.initial_state(x[0])
+    y_ref, zf = signal.sosfilt(np.array(filt.sos), x, axis=0, zi=zi0)
+    zi = zi0.copy()
+    np.testing.assert_allclose(_run(filt, x, zi0), y_ref, atol=1e-12)
+    np.testing.assert_array_equal(zi0, zi)  # step never writes into its state
+    state = zi0
+    for row in x:
+        state, _ = filt.step(state, row)
+    np.testing.assert_allclose(state, zf, atol=1e-12)
+
+
+def test_filter_raises_on_a_state_of_the_wrong_size() -> None:
+    filt = LowPassFilter(cutoff_hz=5.0, period_s=1e-3, order=3, channels=1)
+    with pytest.raises(ParameterError, match="filter state must hold 4 floats, got 2"):
+        filt.step_scalar((0.0, 0.0), 1.0)
+    with pytest.raises(ParameterError, match=r"filter state must have shape \(2, 2, 1\)"):
+        filt.step(np.zeros((1, 2, 1)), [1.0])
+    with pytest.raises(ParameterError, match="needs channels=1"):
+        LowPassFilter(cutoff_hz=5.0, period_s=1e-3).initial_state_scalar(0.0)

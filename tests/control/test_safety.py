@@ -93,3 +93,28 @@ def test_travel_limit_stops_before_leaving_the_envelope() -> None:
     new, reason = check_travel(LIMITS, travel, [0, 0, 0.05, 0, 0, 0], 1e-3)
     assert reason is None
     np.testing.assert_allclose(new[2], -0.01999 + 5e-5)
+
+
+def test_limit_twist_passes_nan_through_like_numpy_clip() -> None:
+    v = limit_twist(LIMITS, [math.nan, 0.5, 0, 0, 0, 0], np.zeros(6), 1e-3)
+    assert math.isnan(v[0]) and v[1] == pytest.approx(1e-3)
+    v = limit_twist(LIMITS, np.zeros(6), [math.nan, 0, 0, 0, 0, 0], 1e-3)
+    assert math.isnan(v[0]) and np.all(v[1:] == 0.0)
+    v = limit_twist(LIMITS, [math.inf, -math.inf, 0, 0, 0, 0], [0.1, -0.1, 0, 0, 0, 0], 1e-3)
+    np.testing.assert_allclose(v, [0.1, -0.1, 0, 0, 0, 0])
+
+
+def test_watchdog_calls_huge_finite_values_finite_and_the_force_limit_stops_them() -> None:
+    huge = np.array([1e308, 1e308, 0, 0, 0, 0])  # finite, though their sum overflows
+    _, reason = check_sample(LIMITS, WatchdogState(), 0.0, huge, 0.0)
+    assert reason is None
+    assert check_wrench(LIMITS, huge) is StopReason.FORCE_LIMIT
+
+
+def test_checks_raise_on_vectors_that_are_not_six_values() -> None:
+    with pytest.raises(ParameterError, match=r"wrench must have shape \(6,\)"):
+        check_wrench(LIMITS, [0, 0, 1])
+    with pytest.raises(ParameterError, match=r"twist_prev must have shape \(6,\)"):
+        limit_twist(LIMITS, np.zeros(6), np.zeros(5), 1e-3)
+    with pytest.raises(ParameterError, match=r"twist must have shape \(6,\)"):
+        check_travel(LIMITS, np.zeros(6), np.zeros(7), 1e-3)

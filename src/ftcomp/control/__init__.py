@@ -12,11 +12,11 @@ from ftcomp.control.laws import (
     AdmittanceLaw,
     CombinedLaw,
     LawState,
-    MassDamperSpringLaw,
     PositionLaw,
     VelocityLaw,
     selection_matrix,
 )
+from ftcomp.control.mass_damper_spring import MassDamperSpringLaw
 from ftcomp.control.safety import (
     SafetyLimits,
     StopReason,

@@ -28,8 +28,8 @@ Laws:
 - :class:`VelocityLaw` (Eq. 25): ΔV = S K2 ΔF.
 - :class:`CombinedLaw` (Eq. 26-27): ΔV = S (K1 dΔF/dt + K2 ΔF), the derivative a backward
   difference of the input (give it a filtered wrench error, see :mod:`ftcomp.control.filters`).
-- :class:`MassDamperSpringLaw`: M x'' + D x' + K x = S ΔF per axis, integrated with
-  semi-implicit Euler as ros2_controllers' ``admittance_controller`` does.
+- :class:`~ftcomp.control.mass_damper_spring.MassDamperSpringLaw`: M x'' + D x' + K x = S ΔF per
+  axis, integrated with semi-implicit Euler as ros2_controllers' ``admittance_controller`` does.
 
 Units: K1 [m/N] (rad/(N*m) on rotation axes), K2 [m/(s*N)], M [kg], D [N*s/m], K [N/m]
 (rotational analogues on axes 3-5). The paper quotes k13 in mm/N and k23 in mm/(s*N): convert at
@@ -38,25 +38,27 @@ the edges (``k1_mm_per_N * 1e-3``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ftcomp.arrays import frozen_array
 from ftcomp.errors import ParameterError
 
 __all__ = [
     "AdmittanceLaw",
     "CombinedLaw",
     "LawState",
-    "MassDamperSpringLaw",
     "PositionLaw",
     "VelocityLaw",
     "selection_matrix",
 ]
 
 _AXES = ("x", "y", "z", "rx", "ry", "rz")
+_ZERO6 = frozen_array(np.zeros(6), (6,), name="zero")
 
 
 class LawState(NamedTuple):
@@ -121,11 +123,11 @@ def selection_matrix(axes: str | ArrayLike) -> NDArray[np.float64]:
 
 def _frozen_diag(name: str, value: ArrayLike, *, positive: bool = False) -> NDArray[np.float64]:
     """A gain given as a scalar, six values or a 6x6 diagonal matrix, as a read-only (6,) array."""
-    arr = np.array(value, dtype=float)
+    arr = np.asarray(value, dtype=float)
     if arr.shape == (6, 6):
         if np.any(arr - np.diag(np.diag(arr))):
             raise ParameterError(f"{name} must be diagonal, got off-diagonal terms")
-        arr = np.diag(arr).copy()
+        arr = np.diag(arr)
     elif arr.shape == ():
         arr = np.full(6, float(arr))
     if arr.shape != (6,):
@@ -136,8 +138,7 @@ def _frozen_diag(name: str, value: ArrayLike, *, positive: bool = False) -> NDAr
         raise ParameterError(f"{name} must be > 0 on every axis, got {arr.tolist()}")
     if not positive and np.any(arr < 0.0):
         raise ParameterError(f"{name} must be >= 0 on every axis, got {arr.tolist()}")
-    arr.setflags(write=False)
-    return arr
+    return frozen_array(arr, (6,), name=name)
 
 
 def _frozen_selection(selection: ArrayLike | str) -> NDArray[np.float64]:
@@ -151,8 +152,12 @@ def _frozen_selection(selection: ArrayLike | str) -> NDArray[np.float64]:
                 raise ParameterError("selection must be a diagonal 6x6 matrix")
             arr = np.diag(arr)
         matrix = selection_matrix(arr)
-    matrix.setflags(write=False)
-    return matrix
+    return frozen_array(matrix, (6, 6), name="selection")
+
+
+def _diagonal(selection: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The diagonal of S, six 0/1 values, read-only (S itself is kept as the (6, 6) matrix)."""
+    return frozen_array(np.diag(selection), (6,), name="selection")
 
 
 def _check_dt(dt: float) -> None:
@@ -187,6 +192,62 @@ def _combined_step(
     return LawState(state.offset + twist * dt, twist, e), twist
 
 
+# The Eq. 24-27 laws on floats, for the controller's 1 kHz step (package-internal): with S folded
+# into the gains, ``twist_i = SK1_i * (e_i - e_prev_i) / dt + SK2_i * e_i``; S is 0 or 1, so this
+# is the same arithmetic as ``_combined_step`` on selected axes and 0 on the others.
+_RateGains = tuple[tuple[float, ...], tuple[float, ...]]
+
+
+def _rate_gains(
+    k1: NDArray[np.float64], k2: NDArray[np.float64], s: NDArray[np.float64]
+) -> _RateGains:
+    return tuple((s * k1).tolist()), tuple((s * k2).tolist())
+
+
+def _rate_step(
+    gains: _RateGains,
+    offset: Sequence[float],
+    wrench_error_prev: Sequence[float],
+    wrench_error: Sequence[float],
+    dt: float,
+) -> tuple[list[float], list[float]]:
+    """``_combined_step`` on six floats each, ``dt`` already checked: ``(offset, twist)``.
+
+    Written out per axis: on six numbers a Python loop costs more than the arithmetic.
+    """
+    a0, a1, a2, a3, a4, a5 = gains[0]  # S K1
+    b0, b1, b2, b3, b4, b5 = gains[1]  # S K2
+    e0, e1, e2, e3, e4, e5 = wrench_error
+    p0, p1, p2, p3, p4, p5 = wrench_error_prev
+    v0 = a0 * ((e0 - p0) / dt) + b0 * e0
+    v1 = a1 * ((e1 - p1) / dt) + b1 * e1
+    v2 = a2 * ((e2 - p2) / dt) + b2 * e2
+    v3 = a3 * ((e3 - p3) / dt) + b3 * e3
+    v4 = a4 * ((e4 - p4) / dt) + b4 * e4
+    v5 = a5 * ((e5 - p5) / dt) + b5 * e5
+    x0, x1, x2, x3, x4, x5 = offset
+    offset_new = [
+        x0 + v0 * dt,
+        x1 + v1 * dt,
+        x2 + v2 * dt,
+        x3 + v3 * dt,
+        x4 + v4 * dt,
+        x5 + v5 * dt,
+    ]
+    return offset_new, [v0, v1, v2, v3, v4, v5]
+
+
+def _rate_gains_of(law: object) -> _RateGains | None:
+    """(S K1, S K2) of an Eq. 24-27 law as floats; None for a law of another form.
+
+    The controller steps :class:`CombinedLaw`, :class:`PositionLaw` and :class:`VelocityLaw`
+    with :func:`_rate_step`, any other law through its own ``step``.
+    """
+    if isinstance(law, (CombinedLaw, PositionLaw, VelocityLaw)):
+        return law._rate_gains
+    return None
+
+
 @dataclass(frozen=True)
 class CombinedLaw:
     """ΔV = S (K1 dΔF/dt + K2 ΔF), paper Eq. 26-27.
@@ -207,11 +268,16 @@ class CombinedLaw:
     k1_m_per_N: NDArray[np.float64]
     k2_m_per_s_N: NDArray[np.float64]
     selection: NDArray[np.float64]
+    _s: NDArray[np.float64] = field(init=False, repr=False, compare=False)
+    _rate_gains: _RateGains = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "k1_m_per_N", _frozen_diag("k1_m_per_N", self.k1_m_per_N))
         object.__setattr__(self, "k2_m_per_s_N", _frozen_diag("k2_m_per_s_N", self.k2_m_per_s_N))
         object.__setattr__(self, "selection", _frozen_selection(self.selection))
+        s = _diagonal(self.selection)
+        object.__setattr__(self, "_s", s)
+        object.__setattr__(self, "_rate_gains", _rate_gains(self.k1_m_per_N, self.k2_m_per_s_N, s))
 
     def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
         """At rest; ``wrench_error`` [N, N*m] is the previous input the derivative starts from."""
@@ -230,8 +296,8 @@ class CombinedLaw:
         Returns:
             ``(new_state, twist)``, twist [m/s, rad/s] in the control frame, shape (6,).
         """
-        s = np.diag(self.selection)
-        return _combined_step(self.k1_m_per_N, self.k2_m_per_s_N, s, state, wrench_error, dt)
+        k1, k2 = self.k1_m_per_N, self.k2_m_per_s_N
+        return _combined_step(k1, k2, self._s, state, wrench_error, dt)
 
 
 @dataclass(frozen=True)
@@ -245,10 +311,15 @@ class PositionLaw:
 
     k1_m_per_N: NDArray[np.float64]
     selection: NDArray[np.float64]
+    _s: NDArray[np.float64] = field(init=False, repr=False, compare=False)
+    _rate_gains: _RateGains = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "k1_m_per_N", _frozen_diag("k1_m_per_N", self.k1_m_per_N))
         object.__setattr__(self, "selection", _frozen_selection(self.selection))
+        s = _diagonal(self.selection)
+        object.__setattr__(self, "_s", s)
+        object.__setattr__(self, "_rate_gains", _rate_gains(self.k1_m_per_N, _ZERO6, s))
 
     def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
         """At rest; ``wrench_error`` [N, N*m] is the input at which ΔX = 0."""
@@ -258,9 +329,7 @@ class PositionLaw:
         self, state: LawState, wrench_error: ArrayLike, dt: float
     ) -> tuple[LawState, NDArray[np.float64]]:
         """One period: see :meth:`CombinedLaw.step`."""
-        zero = np.zeros(6)
-        s = np.diag(self.selection)
-        return _combined_step(self.k1_m_per_N, zero, s, state, wrench_error, dt)
+        return _combined_step(self.k1_m_per_N, _ZERO6, self._s, state, wrench_error, dt)
 
 
 @dataclass(frozen=True)
@@ -274,10 +343,15 @@ class VelocityLaw:
 
     k2_m_per_s_N: NDArray[np.float64]
     selection: NDArray[np.float64]
+    _s: NDArray[np.float64] = field(init=False, repr=False, compare=False)
+    _rate_gains: _RateGains = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "k2_m_per_s_N", _frozen_diag("k2_m_per_s_N", self.k2_m_per_s_N))
         object.__setattr__(self, "selection", _frozen_selection(self.selection))
+        s = _diagonal(self.selection)
+        object.__setattr__(self, "_s", s)
+        object.__setattr__(self, "_rate_gains", _rate_gains(_ZERO6, self.k2_m_per_s_N, s))
 
     def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
         """At rest."""
@@ -287,51 +361,4 @@ class VelocityLaw:
         self, state: LawState, wrench_error: ArrayLike, dt: float
     ) -> tuple[LawState, NDArray[np.float64]]:
         """One period: see :meth:`CombinedLaw.step`."""
-        zero = np.zeros(6)
-        s = np.diag(self.selection)
-        return _combined_step(zero, self.k2_m_per_s_N, s, state, wrench_error, dt)
-
-
-@dataclass(frozen=True)
-class MassDamperSpringLaw:
-    """M x'' + D x' + K x = S ΔF per axis (ros2_controllers' admittance_controller).
-
-    ``x`` is the law's ``offset`` from where it started. Integrated with semi-implicit Euler:
-    ``a = (ΔF - D v - K x) / M; v += a dt; x += v dt``, stable for ``dt < 2 sqrt(M/K)``
-    on each axis.
-
-    Attributes:
-        mass_kg: M, a scalar or diagonal (6,) [kg; kg*m^2], > 0.
-        damping_N_s_per_m: D, a scalar or diagonal (6,) [N*s/m; N*m*s/rad], >= 0.
-        stiffness_N_per_m: K, a scalar or diagonal (6,) [N/m; N*m/rad], >= 0 (0: no return).
-        selection: S (see :class:`CombinedLaw`).
-    """
-
-    mass_kg: NDArray[np.float64]
-    damping_N_s_per_m: NDArray[np.float64]
-    stiffness_N_per_m: NDArray[np.float64]
-    selection: NDArray[np.float64]
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "mass_kg", _frozen_diag("mass_kg", self.mass_kg, positive=True))
-        for name in ("damping_N_s_per_m", "stiffness_N_per_m"):
-            object.__setattr__(self, name, _frozen_diag(name, getattr(self, name)))
-        object.__setattr__(self, "selection", _frozen_selection(self.selection))
-
-    def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
-        """At rest at the start point (offset 0, twist 0)."""
-        return _rest_state(wrench_error)
-
-    def step(
-        self, state: LawState, wrench_error: ArrayLike, dt: float
-    ) -> tuple[LawState, NDArray[np.float64]]:
-        """One period: see :meth:`CombinedLaw.step`."""
-        _check_dt(dt)
-        e = _vector6(wrench_error)
-        s = np.diag(self.selection)
-        accel = (
-            s * e - self.damping_N_s_per_m * state.twist - self.stiffness_N_per_m * state.offset
-        ) / self.mass_kg
-        twist = s * (state.twist + accel * dt)
-        offset = state.offset + twist * dt
-        return LawState(offset, twist, e), twist
+        return _combined_step(_ZERO6, self.k2_m_per_s_N, self._s, state, wrench_error, dt)

@@ -15,12 +15,14 @@ from __future__ import annotations
 
 import enum
 import math
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ftcomp.arrays import frozen_array
 from ftcomp.errors import ParameterError
 
 __all__ = [
@@ -45,16 +47,15 @@ class StopReason(str, enum.Enum):
     TRAVEL_LIMIT = "travel_limit"
 
 
-def _frozen6(name: str, value: ArrayLike) -> NDArray[np.float64]:
-    arr = np.array(value, dtype=float)
+def _positive6(name: str, value: ArrayLike) -> NDArray[np.float64]:
+    arr = np.asarray(value, dtype=float)
     if arr.shape == ():
         arr = np.full(6, float(arr))
     if arr.shape != (6,) or not np.all(arr > 0.0):
         raise ParameterError(
             f"{name} must be > 0 on all six axes, got {np.asarray(value).tolist()}"
         )
-    arr.setflags(write=False)
-    return arr
+    return frozen_array(arr, (6,), name=name)
 
 
 @dataclass(frozen=True)
@@ -79,10 +80,16 @@ class SafetyLimits:
     max_torque_Nm: float
     stale_after_s: float
     max_repeated_samples: int = 0
+    # The three vectors as floats, prepared once for the float kernels the controller calls.
+    _max_twist: tuple[float, ...] = field(init=False, repr=False, compare=False)
+    _max_twist_rate: tuple[float, ...] = field(init=False, repr=False, compare=False)
+    _max_travel: tuple[float, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for name in ("max_twist", "max_twist_rate", "max_travel"):
-            object.__setattr__(self, name, _frozen6(name, getattr(self, name)))
+            arr = _positive6(name, getattr(self, name))
+            object.__setattr__(self, name, arr)
+            object.__setattr__(self, f"_{name}", tuple(arr.tolist()))
         for name in ("max_force_N", "max_torque_Nm", "stale_after_s"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value > 0.0 and not math.isnan(value)):
@@ -98,6 +105,14 @@ class WatchdogState(NamedTuple):
 
     last_t: float = -math.inf
     repeats: int = 0
+
+
+def _floats(value: ArrayLike, name: str | None = None) -> list[float]:
+    """``value`` as a flat list of floats; with a ``name``, it must have shape (6,)."""
+    arr = np.asarray(value, dtype=float)
+    if name is not None and arr.shape != (6,):
+        raise ParameterError(f"{name} must have shape (6,), got {arr.shape}")
+    return arr.ravel().tolist()
 
 
 def check_sample(
@@ -119,7 +134,21 @@ def check_sample(
     Returns:
         ``(new_state, reason)``; ``reason`` is None when the sample may be used.
     """
-    if not (math.isfinite(t_sample) and np.all(np.isfinite(wrench))):
+    return _check_sample(limits, state, t_sample, _floats(wrench), now)
+
+
+def _check_sample(
+    limits: SafetyLimits,
+    state: WatchdogState,
+    t_sample: float,
+    wrench: Sequence[float],
+    now: float,
+) -> tuple[WatchdogState, StopReason | None]:
+    """:func:`check_sample` on a list of floats (the controller's kernel)."""
+    # One sum is finite exactly when every term is, unless finite terms overflow: then look closer.
+    if not math.isfinite(t_sample + sum(wrench)) and not (
+        math.isfinite(t_sample) and all(map(math.isfinite, wrench))
+    ):
         return state, StopReason.NON_FINITE_SAMPLE
     if t_sample <= state.last_t:
         repeats = state.repeats + 1
@@ -136,10 +165,15 @@ def check_sample(
 
 def check_wrench(limits: SafetyLimits, wrench: ArrayLike) -> StopReason | None:
     """FORCE_LIMIT or TORQUE_LIMIT when the contact wrench's force or torque norm is too large."""
-    w = np.asarray(wrench, dtype=float)
-    if float(np.linalg.norm(w[:3])) > limits.max_force_N:
+    return _check_wrench(limits, _floats(wrench, "wrench"))
+
+
+def _check_wrench(limits: SafetyLimits, wrench: Sequence[float]) -> StopReason | None:
+    """:func:`check_wrench` on six floats (the controller's kernel)."""
+    fx, fy, fz, tx, ty, tz = wrench
+    if math.sqrt(fx * fx + fy * fy + fz * fz) > limits.max_force_N:
         return StopReason.FORCE_LIMIT
-    if float(np.linalg.norm(w[3:])) > limits.max_torque_Nm:
+    if math.sqrt(tx * tx + ty * ty + tz * tz) > limits.max_torque_Nm:
         return StopReason.TORQUE_LIMIT
     return None
 
@@ -163,10 +197,42 @@ def limit_twist(
     """
     if not dt > 0.0:
         raise ParameterError(f"dt must be > 0 s, got {dt}")
-    prev = np.asarray(twist_prev, dtype=float)
-    v = np.clip(np.asarray(twist_cmd, dtype=float), -limits.max_twist, limits.max_twist)
-    step = limits.max_twist_rate * dt
-    return np.clip(v, prev - step, prev + step)
+    cmd, prev = _floats(twist_cmd, "twist_cmd"), _floats(twist_prev, "twist_prev")
+    return np.array(_limit_twist(limits, cmd, prev, dt))
+
+
+def _limit_twist(
+    limits: SafetyLimits, twist_cmd: Sequence[float], twist_prev: Sequence[float], dt: float
+) -> list[float]:
+    """:func:`limit_twist` on six floats each, ``dt`` already checked (the controller's kernel).
+
+    Exactly :func:`numpy.clip` twice, written out per axis (a loop costs more than the clamps).
+    A NaN or an infinity takes numpy's own clip, which passes a NaN through.
+    """
+    v0, v1, v2, v3, v4, v5 = twist_cmd
+    p0, p1, p2, p3, p4, p5 = twist_prev
+    if not math.isfinite(v0 + v1 + v2 + v3 + v4 + v5 + p0 + p1 + p2 + p3 + p4 + p5):
+        prev = np.array(twist_prev, dtype=float)
+        v = np.clip(np.array(twist_cmd, dtype=float), -limits.max_twist, limits.max_twist)
+        step = limits.max_twist_rate * dt
+        return np.clip(v, prev - step, prev + step).tolist()
+    m0, m1, m2, m3, m4, m5 = limits._max_twist
+    v0 = -m0 if v0 < -m0 else m0 if v0 > m0 else v0
+    v1 = -m1 if v1 < -m1 else m1 if v1 > m1 else v1
+    v2 = -m2 if v2 < -m2 else m2 if v2 > m2 else v2
+    v3 = -m3 if v3 < -m3 else m3 if v3 > m3 else v3
+    v4 = -m4 if v4 < -m4 else m4 if v4 > m4 else v4
+    v5 = -m5 if v5 < -m5 else m5 if v5 > m5 else v5
+    a0, a1, a2, a3, a4, a5 = limits._max_twist_rate
+    s0, s1, s2, s3, s4, s5 = a0 * dt, a1 * dt, a2 * dt, a3 * dt, a4 * dt, a5 * dt
+    return [
+        p0 - s0 if v0 < p0 - s0 else p0 + s0 if v0 > p0 + s0 else v0,
+        p1 - s1 if v1 < p1 - s1 else p1 + s1 if v1 > p1 + s1 else v1,
+        p2 - s2 if v2 < p2 - s2 else p2 + s2 if v2 > p2 + s2 else v2,
+        p3 - s3 if v3 < p3 - s3 else p3 + s3 if v3 > p3 + s3 else v3,
+        p4 - s4 if v4 < p4 - s4 else p4 + s4 if v4 > p4 + s4 else v4,
+        p5 - s5 if v5 < p5 - s5 else p5 + s5 if v5 > p5 + s5 else v5,
+    ]
 
 
 def check_travel(
@@ -185,7 +251,25 @@ def check_travel(
         not be sent).
     """
     current = np.asarray(travel, dtype=float)
-    new = current + np.asarray(twist, dtype=float) * dt
-    if np.any(np.abs(new) > limits.max_travel):
-        return current, StopReason.TRAVEL_LIMIT
-    return new, None
+    new, reason = _check_travel(limits, _floats(current, "travel"), _floats(twist, "twist"), dt)
+    return (current, reason) if reason is not None else (np.array(new), None)
+
+
+def _check_travel(
+    limits: SafetyLimits, travel: Sequence[float], twist: Sequence[float], dt: float
+) -> tuple[Sequence[float], StopReason | None]:
+    """:func:`check_travel` on six floats each (the controller's kernel)."""
+    x0, x1, x2, x3, x4, x5 = travel
+    v0, v1, v2, v3, v4, v5 = twist
+    x0, x1, x2, x3, x4, x5 = (
+        x0 + v0 * dt,
+        x1 + v1 * dt,
+        x2 + v2 * dt,
+        x3 + v3 * dt,
+        x4 + v4 * dt,
+        x5 + v5 * dt,
+    )
+    m0, m1, m2, m3, m4, m5 = limits._max_travel
+    if abs(x0) > m0 or abs(x1) > m1 or abs(x2) > m2 or abs(x3) > m3 or abs(x4) > m4 or abs(x5) > m5:
+        return travel, StopReason.TRAVEL_LIMIT
+    return [x0, x1, x2, x3, x4, x5], None

@@ -137,7 +137,7 @@ class _PlacementStep:
         self.state = self.controller.initial_state(w0, R)
         self.decision_filter = LowPassFilter(config.decision_cutoff_hz, dt, order=1, channels=1)
         f0 = float(-(self.up @ R) @ w0[:3])
-        self.decision_state = self.decision_filter.initial_state([f0])
+        self.decision_state = self.decision_filter.initial_state_scalar(f0)
         self.f_dec = f0
         self.p_ref = first.p_base_sensor
         self.p_prev = first.p_base_sensor
@@ -182,8 +182,9 @@ class _PlacementStep:
         )
         f_comp = float(-(self.up @ R) @ w_c[:3])
         if math.isfinite(f_comp):
-            self.decision_state, f_dec = self.decision_filter.step(self.decision_state, [f_comp])
-            self.f_dec = float(f_dec[0])
+            self.decision_state, self.f_dec = self.decision_filter.step_scalar(
+                self.decision_state, f_comp
+            )
         f_filt = self.f_dec if math.isfinite(f_comp) else math.nan
         velocity = float((self.p_prev - p) @ self.up) / self.dt if self.rows else 0.0
         self.p_prev = p
