@@ -60,3 +60,12 @@ def test_samples_are_frozen_and_stamped_in_integer_nanoseconds() -> None:
         sample.wrench_sensor[0] = 1.0
     with pytest.raises(ParameterError, match="shape"):
         PoseSample(0, np.zeros(2), np.eye(3))
+
+
+def test_owning_constructors_take_the_arrays_and_make_them_read_only() -> None:
+    w, p, R = np.arange(6.0), np.zeros(3), np.eye(3)
+    sample, pose = WrenchSample.owning(7, w), PoseSample.owning(7, p, R)
+    assert sample.wrench_sensor is w and pose.R_base_tcp is R and sample.t_ns == pose.t_ns == 7
+    for arr in (w, p, R):
+        with pytest.raises(ValueError):
+            arr[0] = 1.0

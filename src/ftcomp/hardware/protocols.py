@@ -62,6 +62,17 @@ class WrenchSample:
         """The time stamp in seconds (for arithmetic)."""
         return self.t_ns / _NS_PER_S
 
+    @classmethod
+    def owning(cls, t_ns: int, wrench_sensor: NDArray[np.float64]) -> WrenchSample:
+        """A sample that takes ownership of a fresh float64 (6,) array without copying it
+        (for a backend's 1 kHz path; the array is made read-only, so pass one nobody else keeps).
+        """
+        wrench_sensor.setflags(write=False)
+        sample = object.__new__(cls)
+        object.__setattr__(sample, "t_ns", t_ns)
+        object.__setattr__(sample, "wrench_sensor", wrench_sensor)
+        return sample
+
 
 @dataclass(frozen=True)
 class PoseSample:
@@ -80,6 +91,20 @@ class PoseSample:
     def __post_init__(self) -> None:
         freeze_field(self, "p_base_tcp", (3,))
         freeze_field(self, "R_base_tcp", (3, 3))
+
+    @classmethod
+    def owning(
+        cls, t_ns: int, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
+    ) -> PoseSample:
+        """A pose that takes ownership of fresh float64 arrays of shapes (3,) and (3, 3) without
+        copying them (a backend's 1 kHz path; they are made read-only)."""
+        p_base_tcp.setflags(write=False)
+        R_base_tcp.setflags(write=False)
+        sample = object.__new__(cls)
+        object.__setattr__(sample, "t_ns", t_ns)
+        object.__setattr__(sample, "p_base_tcp", p_base_tcp)
+        object.__setattr__(sample, "R_base_tcp", R_base_tcp)
+        return sample
 
 
 def _rotation_matrix(name: str, value: ArrayLike) -> NDArray[np.float64]:

@@ -111,6 +111,7 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         sponge = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, NAMES["sponge_joint"])
         self._sponge_qadr = int(m.jnt_qposadr[sponge]) if sponge >= 0 else -1
         self._R_world_base = self._config.R_world_base
+        self._R_base_world = np.ascontiguousarray(self._R_world_base.T)
         self._R6_world_base = np.kron(np.eye(2), self._R_world_base)
         self._gravity = float(np.linalg.norm(m.opt.gravity))
 
@@ -198,8 +199,11 @@ class SimCell(ArmMotion, GripperAndSurfaces):
 
     def pose(self) -> PoseSample:
         """The TCP pose, stamped: the simulated TCP *is* the sensor frame (identity mount)."""
-        p, R = self.sensor_pose()
-        return PoseSample(self.now_ns(), p, R)
+        d = self._data
+        RwbT = self._R_base_world
+        p = RwbT @ d.site_xpos[self._site]
+        R = RwbT @ d.site_xmat[self._site].reshape(3, 3)
+        return PoseSample.owning(round(d.time * 1e9), p, R)
 
     def sensor_pose(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(p_base_sensor [m] (3,), R_base_sensor (3, 3))`` of the latest physics state."""

@@ -260,7 +260,7 @@ class SimWrenchSensor:
             np.rint(x, out=x)
             x *= self._step
         self._last_tick = k
-        self._last = WrenchSample(self._stamp_ns(k), x)
+        self._last = WrenchSample.owning(self._stamp_ns(k), x)
         return self._last
 
     def read_new(self) -> list[WrenchSample]:
