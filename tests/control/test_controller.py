@@ -356,18 +356,76 @@ def test_a_seeded_run_with_faults_replays_exactly_and_never_writes_into_a_state(
             np.testing.assert_array_equal(a, b)
 
 
-def test_step_raises_on_a_wrong_shape_or_period_not_on_bad_data() -> None:
+def test_step_stops_instead_of_raising_on_a_wrong_shape_or_period() -> None:
     ctrl = _controller()
     state = ctrl.initial_state(LOAD_SENSOR, R_DOWN)
-    with pytest.raises(ParameterError, match=r"wrench_contact_sensor must have shape \(6,\)"):
-        ctrl.step(state, 0.0, LOAD_SENSOR[:5], R_DOWN, 0.0, DT)
-    with pytest.raises(ParameterError, match=r"R_base_sensor must have shape \(3, 3\)"):
-        ctrl.step(state, 0.0, LOAD_SENSOR, R_DOWN[:2], 0.0, DT)
-    with pytest.raises(ParameterError, match="dt must be > 0"):
-        ctrl.step(state, 0.0, LOAD_SENSOR, R_DOWN, 0.0, 0.0)
+    for args in (
+        (0.0, LOAD_SENSOR[:5], R_DOWN, 0.0, DT),  # a wrench of the wrong length
+        (0.0, LOAD_SENSOR, R_DOWN[:2], 0.0, DT),  # an orientation of the wrong shape
+        (0.0, LOAD_SENSOR, R_DOWN, 0.0, 0.0),  # dt zero
+        (0.0, LOAD_SENSOR, R_DOWN, 0.0, math.nan),  # dt NaN
+        (0.0, "garbage", R_DOWN, 0.0, DT),  # not numbers at all
+    ):
+        stopped, twist = ctrl.step(state, *args)  # type: ignore[arg-type]
+        assert stopped.stop_reason is StopReason.INVALID_INPUT and not np.any(twist)
     huge = np.array([1e308, 1e308, 0.0, 0.0, 0.0, 0.0])  # finite, though its sum is not
     stopped, twist = ctrl.step(state, 0.0, huge, R_DOWN, 0.0, DT)
     assert stopped.stop_reason is StopReason.FORCE_LIMIT and not np.any(twist)
+
+
+def _moving(ctrl: AdmittanceController, n: int = 20) -> tuple[ControllerState, float]:
+    """A controller lowering a hanging load for ``n`` periods; returns the state and the time."""
+    state = ctrl.initial_state(LOAD_SENSOR, R_DOWN)
+    for k in range(n):
+        state, twist = ctrl.step(state, k * DT, LOAD_SENSOR + 0.01 * k, R_DOWN, k * DT, DT)
+    assert state.stop_reason is None and np.any(twist)
+    return state, n * DT
+
+
+def test_a_nan_orientation_once_stops_and_keeps_the_travel_limit() -> None:
+    ctrl = _controller()
+    state, t = _moving(ctrl)
+    R_bad = R_DOWN.copy()
+    R_bad[0, 0] = math.nan
+    stopped, twist = ctrl.step(state, t, LOAD_SENSOR, R_bad, t, DT)
+    assert stopped.stop_reason is StopReason.NON_FINITE_POSE and not np.any(twist)
+    np.testing.assert_array_equal(stopped.travel_base, state.travel_base)
+    assert np.all(np.isfinite(stopped.travel_base))
+    later, twist = ctrl.step(stopped, t + DT, LOAD_SENSOR, R_DOWN, t + DT, DT)
+    assert later.stop_reason is StopReason.NON_FINITE_POSE and not np.any(twist)  # latched
+
+
+@pytest.mark.parametrize("now_offset", [math.nan, -0.010])
+def test_a_robot_clock_that_is_nan_or_runs_backwards_stops(now_offset: float) -> None:
+    ctrl = _controller()
+    state, t = _moving(ctrl)
+    stopped, twist = ctrl.step(state, t, LOAD_SENSOR, R_DOWN, t + now_offset, DT)
+    assert stopped.stop_reason is StopReason.CLOCK_FAULT and not np.any(twist)
+
+
+def test_a_value_frozen_under_fresh_stamps_stops_after_the_tolerated_count() -> None:
+    limits = dataclasses.replace(LIMITS, max_identical_samples=5)
+    ctrl = dataclasses.replace(_controller(), limits=limits)
+    state, t = _moving(ctrl)
+    reasons = []
+    for k in range(8):
+        now = t + k * DT
+        state, twist = ctrl.step(state, now, LOAD_SENSOR, R_DOWN, now, DT)
+        reasons.append(state.stop_reason)
+    # The first repeat of a value is the 1st identical sample; the 6th one stops.
+    assert reasons[:6] == [None] * 6 and reasons[6] is StopReason.FROZEN_SAMPLE
+    assert not np.any(twist)
+
+
+def test_a_raw_reading_at_the_sensor_range_stops_below_the_force_limit() -> None:
+    limits = dataclasses.replace(LIMITS, sensor_range=(250.0, 6.0))
+    ctrl = dataclasses.replace(_controller(), limits=limits)
+    state, t = _moving(ctrl)
+    raw = np.array([0.0, 250.0, 3.0, 0.0, 0.0, 0.0])  # fy pinned at the range
+    stopped, twist = ctrl.step(state, t, LOAD_SENSOR, R_DOWN, t, DT, wrench_raw_sensor=raw)
+    assert stopped.stop_reason is StopReason.SENSOR_SATURATED and not np.any(twist)
+    fine, twist = ctrl.step(state, t, LOAD_SENSOR, R_DOWN, t, DT, wrench_raw_sensor=raw * 0.5)
+    assert fine.stop_reason is None
 
 
 def test_a_controller_survives_pickling_with_its_prepared_constants() -> None:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ftcomp.compensation.compensator import GravityCompensator
-from ftcomp.control.loop import ControlCycle, RateLimiter, Reading, run_loop
+from ftcomp.control.loop import ControlCycle, LoopOverrunError, RateLimiter, Reading, run_loop
 from ftcomp.hardware.protocols import Mount
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "experiments"))
@@ -87,3 +87,18 @@ def test_the_loop_stops_the_robot_when_the_step_raises() -> None:
     with pytest.raises(KeyboardInterrupt):
         run_loop(cycle, step)
     assert cell.v_cmd == 0.0  # stopped before the exception left the loop
+
+
+def test_a_loop_that_keeps_overrunning_is_a_fault_and_stops_the_robot() -> None:
+    clock = _Clock()
+    cell = FakeCell(1500.0)
+    limiter = RateLimiter(0.001, clock=clock, sleep=clock.sleep)
+    cycle = ControlCycle(cell, cell, rate_limiter=limiter, max_late_cycles=3)
+
+    def slow_step(reading: Reading) -> np.ndarray | None:
+        clock.now += 0.004  # every cycle's work takes 4 periods
+        return np.array([0.0, 0.0, -0.01, 0.0, 0.0, 0.0])
+
+    with pytest.raises(LoopOverrunError, match="overran its 1 ms period 3 times in a row"):
+        run_loop(cycle, slow_step)
+    assert cell.v_cmd == 0.0

@@ -84,7 +84,7 @@ def test_larger_gains_place_faster_with_more_ripple_on_the_sponge(
     assert k1_times[0] < k1_times[1] < k1_times[2]
 
 
-@pytest.mark.parametrize("fault", ["nan", "repeat", "spike", "stop"])
+@pytest.mark.parametrize("fault", ["nan", "repeat", "spike", "stop", "freeze", "saturate"])
 def test_sensor_faults_stop_motion_within_one_period_and_are_reported(
     fault: str, identified_tool: GravityModel
 ) -> None:
@@ -100,6 +100,8 @@ def test_sensor_faults_stop_motion_within_one_period_and_are_reported(
         "repeat": "repeated_sample",
         "spike": "force_limit",
         "stop": "repeated_sample",
+        "freeze": "frozen_sample",
+        "saturate": "sensor_saturated",
     }
     assert result.metrics["stop_reason"] == expected[fault]
     assert not result.metrics["placed"]

@@ -26,6 +26,7 @@ given. ``bench/bench_control.py`` times it against the straightforward numpy ver
 from __future__ import annotations
 
 import functools
+import math
 import struct
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -51,6 +52,7 @@ from ftcomp.control.safety import (
     _check_travel,
     _check_wrench,
     _limit_twist,
+    _saturated,
 )
 from ftcomp.errors import ParameterError
 
@@ -206,8 +208,10 @@ class AdmittanceController:
         now: float,
         dt: float,
         twist_nominal_base: ArrayLike | None = None,
+        *,
+        wrench_raw_sensor: ArrayLike | None = None,
     ) -> tuple[ControllerState, NDArray[np.float64]]:
-        """One control period.
+        """One control period; never raises and never returns a non-finite twist.
 
         Args:
             state: from :meth:`initial_state` or the previous step; not modified.
@@ -219,26 +223,72 @@ class AdmittanceController:
             dt: control period [s], > 0.
             twist_nominal_base: planned motion [m/s, rad/s], base frame, shape (6,), that the
                 law's ΔV is added to (the paper's ΔV is an offset); None: standing still.
+            wrench_raw_sensor: the uncompensated reading, shape (6,), if the caller has it: the
+                frozen-value check then looks at it, and it is checked against the sensor's
+                range (``limits.sensor_range``).
 
         Returns:
             ``(new_state, twist_base)`` [m/s, rad/s], base frame, shape (6,); zeros once
-            ``new_state.stop_reason`` is set. Never raises on bad sensor data (an argument of
-            the wrong shape or ``dt <= 0`` is a programming error: ParameterError).
+            ``new_state.stop_reason`` is set. Any bad input stops in this period: a wrench of
+            the wrong shape, a non-positive or non-finite ``dt`` (INVALID_INPUT), a non-finite
+            orientation or nominal twist (NON_FINITE_POSE), a robot clock that is NaN or runs
+            backwards (CLOCK_FAULT); see the fault table in ``docs/control.md``.
         """
         if state.stop_reason is not None:
             return state, np.zeros(6)
+        try:
+            return self._step(
+                state,
+                t_sample,
+                wrench_contact_sensor,
+                R_base_sensor,
+                now,
+                dt,
+                twist_nominal_base,
+                wrench_raw_sensor,
+            )
+        except Exception:  # an input no check foresaw: stop rather than raise or move
+            return self._stopped(state, state.watchdog, StopReason.INVALID_INPUT), np.zeros(6)
+
+    def _step(
+        self,
+        state: ControllerState,
+        t_sample: float,
+        wrench_contact_sensor: ArrayLike,
+        R_base_sensor: ArrayLike,
+        now: float,
+        dt: float,
+        twist_nominal_base: ArrayLike | None,
+        wrench_raw_sensor: ArrayLike | None,
+    ) -> tuple[ControllerState, NDArray[np.float64]]:
+        """:meth:`step` once the latch is checked; may raise on inputs of the wrong type."""
         limits = self.limits
         w = _floats(wrench_contact_sensor, (6,), "wrench_contact_sensor")
-        watchdog, reason = _check_sample(limits, state.watchdog, t_sample, w, now)
+        raw = None if wrench_raw_sensor is None else _floats(wrench_raw_sensor, (6,), "raw")
+        watched = w if raw is None else raw
+        watchdog, reason = _check_sample(limits, state.watchdog, float(t_sample), watched, now)
+        if reason is None and raw is not None and not all(map(math.isfinite, w)):
+            reason = StopReason.NON_FINITE_SAMPLE
+        if reason is None and raw is not None and _saturated(limits, raw):
+            reason = StopReason.SENSOR_SATURATED
         if reason is None:
             reason = _check_wrench(limits, w)
+        if reason is None and not (dt > 0.0 and math.isfinite(dt)):
+            reason = StopReason.INVALID_INPUT
         if reason is not None:
             return self._stopped(state, watchdog, reason), np.zeros(6)
+        R = _floats(R_base_sensor, (3, 3), "R_base_sensor")
+        nominal = (
+            None
+            if twist_nominal_base is None
+            else _floats(twist_nominal_base, (6,), "twist_nominal_base")
+        )
+        if not math.isfinite(sum(R[0]) + sum(R[1]) + sum(R[2])) or (
+            nominal is not None and not math.isfinite(sum(nominal))
+        ):
+            return self._stopped(state, watchdog, StopReason.NON_FINITE_POSE), np.zeros(6)
         if watchdog.repeats > 0:  # tolerated repeat: nothing new to filter, hold the command
             return state._replace(watchdog=watchdog), state.twist_base
-        if not dt > 0.0:
-            raise ParameterError(f"dt must be > 0 s, got {dt}")
-        R = _floats(R_base_sensor, (3, 3), "R_base_sensor")
         if self.wrench_filter is not None:
             zi, w_filt = self.wrench_filter._step6(state.filter.tolist(), w)
         else:
@@ -255,11 +305,13 @@ class AdmittanceController:
             law_state, twist_array = self.law.step(state.law, np.array(e), dt)
             twist, law_rows = twist_array.tolist(), []
         twist_base = twist if self.frame == "base" else _rotate6(R, twist)
-        if twist_nominal_base is not None:
+        if nominal is not None:
             v0, v1, v2, v3, v4, v5 = twist_base
-            n0, n1, n2, n3, n4, n5 = _floats(twist_nominal_base, (6,), "twist_nominal_base")
+            n0, n1, n2, n3, n4, n5 = nominal
             twist_base = [v0 + n0, v1 + n1, v2 + n2, v3 + n3, v4 + n4, v5 + n5]
         twist_base = _limit_twist(limits, twist_base, state.twist_base.tolist(), dt)
+        if not math.isfinite(sum(twist_base)):  # the last guard: never command a NaN
+            return self._stopped(state, watchdog, StopReason.NON_FINITE_COMMAND), np.zeros(6)
         travel, reason = _check_travel(limits, state.travel_base.tolist(), twist_base, dt)
         # The new state's arrays are slices of one new buffer: one allocation instead of seven
         # (np.array on six floats costs about as much as packing them all). The layout:

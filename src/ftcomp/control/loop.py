@@ -30,15 +30,19 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.compensation.compensator import GravityCompensator
-from ftcomp.errors import ParameterError
+from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 
-__all__ = ["ControlCycle", "LoopStats", "RateLimiter", "Reading", "run_loop"]
+__all__ = ["ControlCycle", "LoopOverrunError", "LoopStats", "RateLimiter", "Reading", "run_loop"]
 
 _log = logging.getLogger(__name__)
 
 Step = Callable[["Reading"], "NDArray[np.float64] | None"]
 Sink = Callable[["Reading", "NDArray[np.float64]"], None]
+
+
+class LoopOverrunError(HardwareError):
+    """The loop missed its period too many times in a row (the robot has been stopped)."""
 
 
 class RateLimiter:
@@ -135,6 +139,9 @@ class ControlCycle:
             the raw reading on (the paper's uncompensated comparison).
         rate_limiter: holds the loop to wall-clock time after each ``robot.wait_cycle()``;
             None when the robot paces the loop (simulation, a driver that blocks per period).
+        max_late_cycles: this many overruns in a row are a fault (:class:`LoopOverrunError`,
+            and :func:`run_loop` stops the robot): a loop that cannot keep its period no longer
+            controls the arm.
     """
 
     def __init__(
@@ -145,7 +152,11 @@ class ControlCycle:
         mount: Mount | None = None,
         compensator: GravityCompensator | None = None,
         rate_limiter: RateLimiter | None = None,
+        max_late_cycles: int = 10,
     ) -> None:
+        if not (isinstance(max_late_cycles, int) and max_late_cycles >= 1):
+            raise ParameterError(f"max_late_cycles must be an integer >= 1, got {max_late_cycles}")
+        self.max_late_cycles = max_late_cycles
         self.robot = robot
         self.sensor = sensor
         self.mount = mount if mount is not None else Mount()
@@ -169,8 +180,15 @@ class ControlCycle:
     def advance(self) -> None:
         """Wait for (or simulate) the next period."""
         self.robot.wait_cycle()
-        if self.rate_limiter is not None:
-            self.rate_limiter.sleep()
+        limiter = self.rate_limiter
+        if limiter is not None:
+            limiter.sleep()
+            if limiter.late_in_a_row >= self.max_late_cycles:
+                raise LoopOverrunError(
+                    f"the control loop overran its {limiter.period_s * 1e3:g} ms period "
+                    f"{limiter.late_in_a_row} times in a row (worst: late by "
+                    f"{-limiter.worst_slack_s * 1e3:.1f} ms); motion stopped"
+                )
 
 
 @dataclass(frozen=True)

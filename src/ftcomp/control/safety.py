@@ -42,6 +42,12 @@ class StopReason(str, enum.Enum):
     NON_FINITE_SAMPLE = "non_finite_sample"
     REPEATED_SAMPLE = "repeated_sample"
     STALE_SAMPLE = "stale_sample"
+    FROZEN_SAMPLE = "frozen_sample"
+    SENSOR_SATURATED = "sensor_saturated"
+    CLOCK_FAULT = "clock_fault"
+    NON_FINITE_POSE = "non_finite_pose"
+    INVALID_INPUT = "invalid_input"
+    NON_FINITE_COMMAND = "non_finite_command"
     FORCE_LIMIT = "force_limit"
     TORQUE_LIMIT = "torque_limit"
     TRAVEL_LIMIT = "travel_limit"
@@ -71,6 +77,13 @@ class SafetyLimits:
         stale_after_s: a sample older than this (robot clock minus sample stamp) stops [s].
         max_repeated_samples: consecutive samples with an already seen time stamp tolerated
             (0: the first repeat stops; raise it when the sensor is slower than the loop).
+        max_identical_samples: consecutive *new* samples (fresh stamps) with bit-identical values
+            tolerated before FROZEN_SAMPLE (a driver repeating a dead value with new stamps);
+            None: no check. Set it only for a sensor whose noise makes identical readings
+            unlikely (one count of noise on six channels: fewer than 1 in 200 pairs).
+        sensor_range: the sensor's measuring range ``(force_N, torque_Nm)`` per axis; a raw
+            reading at or beyond it is saturated and stops (SENSOR_SATURATED) even below the
+            force limit. None: no check.
     """
 
     max_twist: NDArray[np.float64]
@@ -80,6 +93,8 @@ class SafetyLimits:
     max_torque_Nm: float
     stale_after_s: float
     max_repeated_samples: int = 0
+    max_identical_samples: int | None = None
+    sensor_range: tuple[float, float] | None = None
     # The three vectors as floats, prepared once for the float kernels the controller calls.
     _max_twist: tuple[float, ...] = field(init=False, repr=False, compare=False)
     _max_twist_rate: tuple[float, ...] = field(init=False, repr=False, compare=False)
@@ -98,13 +113,32 @@ class SafetyLimits:
             raise ParameterError(
                 f"max_repeated_samples must be an integer >= 0, got {self.max_repeated_samples!r}"
             )
+        n = self.max_identical_samples
+        if n is not None and not (isinstance(n, int) and n >= 1):
+            raise ParameterError(f"max_identical_samples must be an integer >= 1, got {n!r}")
+        r = self.sensor_range
+        if r is not None and not (
+            len(r) == 2 and all(isinstance(v, (int, float)) and v > 0.0 for v in r)
+        ):
+            raise ParameterError(f"sensor_range must be (force_N, torque_Nm) > 0, got {r!r}")
 
 
 class WatchdogState(NamedTuple):
-    """Last accepted sample stamp [s] (``-inf`` before the first) and the current repeat count."""
+    """What the watchdog remembers between periods.
+
+    Attributes:
+        last_t: last accepted sample stamp [s] (``-inf`` before the first).
+        repeats: consecutive samples with an already seen stamp.
+        last_now: the robot clock at the last period [s] (``-inf`` before the first).
+        identical: consecutive new samples with the same values as ``last_wrench``.
+        last_wrench: the last accepted sample's values (empty before the first).
+    """
 
     last_t: float = -math.inf
     repeats: int = 0
+    last_now: float = -math.inf
+    identical: int = 0
+    last_wrench: tuple[float, ...] = ()
 
 
 def _floats(value: ArrayLike, name: str | None = None) -> list[float]:
@@ -122,7 +156,8 @@ def check_sample(
     wrench: ArrayLike,
     now: float,
 ) -> tuple[WatchdogState, StopReason | None]:
-    """Judge one sample: non-finite values or stamp, a repeated or older stamp, or a stale one.
+    """Judge one sample: a robot clock that is not finite or goes backwards, non-finite values
+    or stamp, a repeated or older stamp, a stale one, or a value frozen under fresh stamps.
 
     Args:
         limits: the envelope.
@@ -145,6 +180,9 @@ def _check_sample(
     now: float,
 ) -> tuple[WatchdogState, StopReason | None]:
     """:func:`check_sample` on a list of floats (the controller's kernel)."""
+    # A clock that is NaN or runs backwards would disable the stale check: stop instead.
+    if not (now >= state.last_now and math.isfinite(now)):
+        return state, StopReason.CLOCK_FAULT
     # One sum is finite exactly when every term is, unless finite terms overflow: then look closer.
     if not math.isfinite(t_sample + sum(wrench)) and not (
         math.isfinite(t_sample) and all(map(math.isfinite, wrench))
@@ -152,7 +190,7 @@ def _check_sample(
         return state, StopReason.NON_FINITE_SAMPLE
     if t_sample <= state.last_t:
         repeats = state.repeats + 1
-        new = WatchdogState(state.last_t, repeats)
+        new = state._replace(repeats=repeats, last_now=now)
         if repeats > limits.max_repeated_samples:
             return new, StopReason.REPEATED_SAMPLE
         if now - state.last_t > limits.stale_after_s:
@@ -160,7 +198,21 @@ def _check_sample(
         return new, None
     if now - t_sample > limits.stale_after_s:
         return state, StopReason.STALE_SAMPLE
-    return WatchdogState(t_sample, 0), None
+    values = tuple(wrench)
+    identical = state.identical + 1 if values == state.last_wrench else 0
+    new = WatchdogState(t_sample, 0, now, identical, values)
+    if limits.max_identical_samples is not None and identical > limits.max_identical_samples:
+        return new, StopReason.FROZEN_SAMPLE
+    return new, None
+
+
+def _saturated(limits: SafetyLimits, raw: Sequence[float]) -> bool:
+    """Whether a raw reading is at or beyond the sensor's range on any axis."""
+    if limits.sensor_range is None:
+        return False
+    force, torque = limits.sensor_range
+    f0, f1, f2, t0, t1, t2 = raw
+    return max(abs(f0), abs(f1), abs(f2)) >= force or max(abs(t0), abs(t1), abs(t2)) >= torque
 
 
 def check_wrench(limits: SafetyLimits, wrench: ArrayLike) -> StopReason | None:

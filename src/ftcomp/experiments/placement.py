@@ -178,7 +178,14 @@ class _PlacementStep:
         if not self.admittance:
             nominal = self.nominal_down if descent < self.depth_target else self.zero
         self.state, twist = self.controller.step(
-            self.state, r.t_sample_ns * 1e-9, w_c, R, now, self.dt, nominal
+            self.state,
+            r.t_sample_ns * 1e-9,
+            w_c,
+            R,
+            now,
+            self.dt,
+            nominal,
+            wrench_raw_sensor=r.wrench_raw_sensor,
         )
         f_comp = float(-(self.up @ R) @ w_c[:3])
         if math.isfinite(f_comp):

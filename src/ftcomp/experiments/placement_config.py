@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import signal
 
+from ftcomp import paper
 from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import ParameterError
 
@@ -69,6 +70,10 @@ class PlacementConfig:
         max_speed_m_per_s: velocity limit [m/s].
         max_accel_m_per_s2: acceleration limit [m/s^2].
         stale_after_s: watchdog age limit of a sample [s].
+        max_identical_samples: consecutive fresh samples with identical raw values that count as
+            a frozen sensor (the paper's sensor has about one count of noise per axis).
+        sensor_range_N: the sensor's force range per axis [N]: a raw reading there is saturated.
+        sensor_range_Nm: the sensor's torque range per axis [N*m].
         max_duration_s: give up (``"timeout"``) after this long [s].
         hold_s: time recorded after the decision, before releasing [s].
         retract_m: lift after releasing [m].
@@ -90,6 +95,9 @@ class PlacementConfig:
     max_speed_m_per_s: float = 0.02
     max_accel_m_per_s2: float = 0.5
     stale_after_s: float = 0.005
+    max_identical_samples: int = 50
+    sensor_range_N: float = paper.SENSOR["force_range_N"]
+    sensor_range_Nm: float = paper.SENSOR["torque_range_Nm"]
     max_duration_s: float = 30.0
     hold_s: float = 0.2
     retract_m: float = 0.01
@@ -115,6 +123,8 @@ class PlacementConfig:
             "max_speed_m_per_s",
             "max_accel_m_per_s2",
             "stale_after_s",
+            "sensor_range_N",
+            "sensor_range_Nm",
             "max_duration_s",
         ):
             value = getattr(self, name)
@@ -152,6 +162,8 @@ def safety_limits(config: PlacementConfig) -> SafetyLimits:
         max_force_N=config.max_force_N,
         max_torque_Nm=config.max_force_N * 0.2,
         stale_after_s=config.stale_after_s,
+        max_identical_samples=config.max_identical_samples,
+        sensor_range=(config.sensor_range_N, config.sensor_range_Nm),
     )
 
 
