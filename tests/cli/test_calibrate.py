@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -119,3 +120,13 @@ def test_usage_errors_exit_2_without_traceback(argv) -> None:
     proc = subprocess.run([sys.executable, "-m", "ftcomp", *argv], capture_output=True, text=True)
     assert proc.returncode == 2
     assert "Traceback" not in proc.stderr
+
+
+def test_calibrate_never_writes_over_its_own_input_even_with_force(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    samples = tmp_path / "s.csv"
+    samples.write_bytes(PAPER_CSV.read_bytes())
+    assert main(["calibrate", str(samples), "-o", str(samples), "--force"]) == 2
+    assert "is also an input of this command" in capsys.readouterr().err
+    assert samples.read_bytes() == PAPER_CSV.read_bytes()

@@ -88,3 +88,15 @@ def test_place_with_an_unreadable_calibration_is_one_line(
     assert main([*place, "--out", str(tmp_path / "run")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and str(bad) in err and err.count("\n") == 1
+
+
+def test_place_keeps_an_earlier_run_unless_forced(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "metrics.json").write_text('{"mine": true}')
+    argv = ["sim", "place", "--surface", "book", "--control", "position", "--out", str(out)]
+    assert main(argv) == 2
+    assert "not empty; pass --force" in capsys.readouterr().err
+    assert json.loads((out / "metrics.json").read_text()) == {"mine": True}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -138,3 +139,62 @@ def test_existing_files_are_not_replaced_without_being_asked(tmp_path) -> None:
     with pytest.raises(ParameterError, match=r"x.json: exists; pass --force"):
         check_writable(path, overwrite=False)
     assert check_writable(path, overwrite=True) == path
+
+
+def _paper_file(tmp_path: Path, **changes: object) -> Path:
+    """The paper's calibration as a file, with some keys changed."""
+    from ftcomp.calibration.identify import calibrate
+    from ftcomp.io.calibration_json import calibration_to_dict
+    from ftcomp.paper import paper_samples
+
+    data = calibration_to_dict(calibrate(paper_samples(), method="paper"))
+    data.update(changes)
+    path = tmp_path / "cal.json"
+    path.write_text(json.dumps(data), encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"tool_weight_N": 1e308}, "'tool_weight_N' = 1e\\+308 is beyond any plausible"),
+        ({"tool_weight_N": 10**400}, "too large"),
+        ({"center_of_gravity_m": [0, 0, 1e6]}, "'center_of_gravity_m' = 1e\\+06"),
+        ({"base_tilt_deg": {"U": 120, "V": 0}}, "base_tilt_deg.U = 120 deg"),
+    ],
+)
+def test_absurd_numbers_in_a_calibration_file_are_one_clear_error(
+    tmp_path: Path, changes: dict[str, object], message: str
+) -> None:
+    path = _paper_file(tmp_path, **changes)
+    with pytest.raises(CalibrationFileError, match=message) as info:
+        load_calibration(path)
+    assert str(path) in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("[" * 100_000 + "]" * 100_000, "nested too deeply"),
+        ('{"tool_weight_N": ' + "9" * 5000 + "}", "not valid JSON"),
+        ('{"a":' * 40 + "1" + "}" * 40, "nested too deeply"),
+    ],
+)
+def test_hostile_json_is_one_clear_error(tmp_path: Path, text: str, message: str) -> None:
+    path = tmp_path / "cal.json"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(CalibrationFileError, match=message):
+        load_calibration(path)
+
+
+def test_an_absurd_calibration_is_never_written(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from ftcomp.calibration.identify import calibrate
+    from ftcomp.paper import paper_samples
+
+    good = calibrate(paper_samples(), method="paper")
+    absurd = replace(good, model=replace(good.model, weight_N=1e308))
+    with pytest.raises(CalibrationFileError, match="beyond any plausible"):
+        save_calibration(tmp_path / "out.json", absurd)
+    assert not (tmp_path / "out.json").exists()

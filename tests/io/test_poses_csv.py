@@ -41,3 +41,15 @@ def test_pose_file_with_a_bad_cell_names_row_and_column(tmp_path: Path) -> None:
     path.write_text("alpha_deg,beta_deg,gamma_deg\n90,0,-180\n90,x,-180\n", encoding="utf-8")
     with pytest.raises(InputFileError, match="row 2, column 'beta_deg'"):
         read_pose_file(path)
+
+
+def test_a_pose_id_given_at_two_different_orientations_is_an_error_as_in_calibrate(
+    tmp_path: Path,
+) -> None:
+    path = tmp_path / "poses.csv"
+    path.write_text(
+        "pose,alpha_deg,beta_deg,gamma_deg\n1,90,0,-180\n2,0,0,180\n1,60,0,-180\n",
+        encoding="utf-8",
+    )
+    with pytest.raises(InputFileError, match="pose '1' is given twice at different poses"):
+        read_pose_file(path)

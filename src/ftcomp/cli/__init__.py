@@ -12,6 +12,7 @@ import argparse
 import importlib
 import sys
 from collections.abc import Sequence
+from typing import NoReturn
 
 from ftcomp import __version__
 
@@ -50,7 +51,7 @@ def _chosen(argv: Sequence[str], names: Sequence[str]) -> str | None:
 
 
 def _add(
-    commands: argparse._SubParsersAction[argparse.ArgumentParser],
+    commands: argparse._SubParsersAction[_Parser],
     table: dict[str, tuple[str, str]],
     chosen: str | None,
 ) -> None:
@@ -61,9 +62,16 @@ def _add(
             importlib.import_module(module).register(parser)
 
 
+class _Parser(argparse.ArgumentParser):
+    """Usage errors as one line ``error: ftcomp CMD: ...`` and exit code 2 (not a usage block)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_BAD_INPUT, f"error: {self.prog}: {message} (see {self.prog} --help)\n")
+
+
 def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
     """The argument parser, with the command named in ``argv`` fully registered."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="ftcomp",
         description="F/T sensor calibration, gravity compensation and compliant control.",
     )

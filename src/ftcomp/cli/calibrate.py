@@ -49,7 +49,7 @@ def register(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read, identify, write, print."""
-    output = check_writable(args.output, overwrite=args.force)
+    output = check_writable(args.output, overwrite=args.force, inputs=[args.samples])
     force_range, torque_range = args.range if args.range else (None, None)
     samples = read_samples(args.samples, force_range_N=force_range, torque_range_Nm=torque_range)
     print_warnings(samples.warnings)

@@ -12,7 +12,8 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from ftcomp import paper
-from ftcomp.experiments.demo import DemoSettings, run_demo
+from ftcomp.errors import ParameterError
+from ftcomp.experiments.demo import DemoSettings, prepare_output, run_demo
 
 __all__ = ["register", "summary_table"]
 
@@ -32,12 +33,20 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--seed", type=int, default=0, help="seed of every simulated sensor's noise"
     )
+    parser.add_argument(
+        "--force",
+        action="store_true",
+        help="write into an --out folder that already holds files (an earlier demo's are replaced)",
+    )
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the demo with a progress bar, then print the summary table."""
+    if args.seed < 0:
+        raise ParameterError(f"--seed must be >= 0, got {args.seed}")
     settings = DemoSettings.quick(args.seed) if args.quick else DemoSettings.full(args.seed)
+    prepare_output(args.out, overwrite=args.force)  # before the progress bar: fail fast
     console = Console(stderr=True)
     started = time.perf_counter()
     with Progress(
@@ -53,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
         def advance(label: str) -> None:
             progress.update(task, advance=1, description=label)
 
-        metrics = run_demo(args.out, settings, advance)
+        metrics = run_demo(args.out, settings, advance, overwrite=True)
     out = Console() if sys.stdout.isatty() else Console(width=120)
     out.print(summary_table(metrics))
     out.print(

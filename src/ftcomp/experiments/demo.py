@@ -28,7 +28,7 @@ from ftcomp.experiments.demo_gravity import (
 )
 from ftcomp.experiments.placement import run_placement, sweep_gains, write_placement_outputs
 from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig, PlacementResult
-from ftcomp.io.atomic import atomic_write_text
+from ftcomp.io.atomic import atomic_write_text, prepare_output_dir
 from ftcomp.io.calibration_json import model_to_dict
 from ftcomp.report.figures import plot_placement
 from ftcomp.report.html import Figure, Section, Table, write_report
@@ -226,27 +226,33 @@ def _cell_text(value: Any) -> str:
     return "-" if value is None else str(value)
 
 
-def prepare_output(out_dir: str | Path) -> Path:
-    """Create the output folder, or reuse it if an earlier demo made it.
+def prepare_output(out_dir: str | Path, *, overwrite: bool = False) -> Path:
+    """Create the output folder; an existing one with files needs ``overwrite`` (``--force``).
 
     Raises:
-        ParameterError: the folder exists, is not empty and was not made by the demo.
+        ParameterError: the folder holds files and ``overwrite`` is false (the message says
+            whether an earlier demo wrote them), or it cannot be written.
     """
     out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise ParameterError(f"{out}: exists and is not a folder")
-    if out.is_dir() and any(out.iterdir()) and not (out / MARKER_FILE).exists():
+    if out.is_dir() and any(out.iterdir()) and not overwrite:
+        if (out / MARKER_FILE).exists():
+            raise ParameterError(
+                f"{out}: holds an earlier demo's results; pass --force to replace them"
+            )
         raise ParameterError(
-            f"{out}: folder exists with files the demo did not write; choose another --out"
+            f"{out}: folder exists with files the demo did not write; choose another --out "
+            "(or pass --force to write into it)"
         )
-    out.mkdir(parents=True, exist_ok=True)
+    prepare_output_dir(out, overwrite=True)
     (out / MARKER_FILE).write_text("written by ftcomp demo\n")
     return out
 
 
-def run_demo(out_dir: str | Path, settings: DemoSettings, advance: Advance) -> dict[str, Any]:
+def run_demo(
+    out_dir: str | Path, settings: DemoSettings, advance: Advance, *, overwrite: bool = False
+) -> dict[str, Any]:
     """Run every section, write the files and the report; returns the metrics."""
-    out = prepare_output(out_dir)
+    out = prepare_output(out_dir, overwrite=overwrite)
     started = time.perf_counter()
     timing: dict[str, float] = {}
 

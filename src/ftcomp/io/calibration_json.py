@@ -28,7 +28,9 @@ from ftcomp.model import GravityModel
 
 __all__ = [
     "FORMAT",
+    "PLAUSIBLE_LIMITS",
     "calibration_to_dict",
+    "check_plausible",
     "load_calibration",
     "model_from_dict",
     "model_to_dict",
@@ -110,8 +112,43 @@ def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
     }
 
 
+#: Largest magnitudes a calibration may hold: far beyond any F/T sensor and tool (the largest
+#: six-axis sensors measure about 1e5 N and 1e4 N*m), so anything beyond is a corrupt file or a
+#: failed fit, not a tool. [N], [m], [N], [N*m].
+PLAUSIBLE_LIMITS: dict[str, float] = {
+    "tool_weight_N": 1e5,
+    "center_of_gravity_m": 10.0,
+    "force_bias_N": 1e5,
+    "torque_bias_Nm": 1e4,
+}
+#: Deepest JSON nesting read (a calibration file nests 3 levels).
+_MAX_DEPTH = 32
+
+
+def check_plausible(model: GravityModel, source: str) -> None:
+    """Raise unless every parameter is within :data:`PLAUSIBLE_LIMITS` (naming the key)."""
+    values = {
+        "tool_weight_N": np.array([model.weight_N]),
+        "center_of_gravity_m": model.center_of_gravity_m,
+        "force_bias_N": model.force_bias_N,
+        "torque_bias_Nm": model.torque_bias_Nm,
+    }
+    for key, limit in PLAUSIBLE_LIMITS.items():
+        worst = float(np.max(np.abs(values[key])))
+        if not worst <= limit:
+            raise CalibrationFileError(
+                f"{source}: {key!r} = {worst:.4g} is beyond any plausible tool or sensor "
+                f"(limit {limit:g}); the file is corrupt or the fit failed"
+            )
+
+
 def save_calibration(path: str | os.PathLike[str], calibration: Calibration) -> None:
-    """Write a calibration file atomically (a temporary file, then rename)."""
+    """Write a calibration file atomically (a temporary file, then rename).
+
+    Raises:
+        CalibrationFileError: a parameter beyond :data:`PLAUSIBLE_LIMITS` (nothing is written).
+    """
+    check_plausible(calibration.model, str(path))
     text = json.dumps(calibration_to_dict(calibration), indent=2, allow_nan=False)
     atomic_write_text(path, text + "\n")
 
@@ -120,9 +157,30 @@ def _number(data: dict[str, Any], key: str, source: str) -> float:
     value = data.get(key)
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise CalibrationFileError(f"{source}: {key!r} must be a number, got {value!r}")
-    if not math.isfinite(value):
+    try:
+        number = float(value)
+    except OverflowError:  # an integer too large for a float
+        raise CalibrationFileError(
+            f"{source}: {key!r} is too large ({len(str(value))} digits)"
+        ) from None
+    if not math.isfinite(number):
         raise CalibrationFileError(f"{source}: {key!r} is not finite ({value})")
-    return float(value)
+    return number
+
+
+def _depth(value: Any, limit: int) -> int:
+    """Nesting depth of parsed JSON, counted up to ``limit + 1``."""
+    todo, depth = [(value, 1)], 0
+    while todo:
+        item, level = todo.pop()
+        depth = max(depth, level)
+        if depth > limit:
+            return depth
+        if isinstance(item, dict):
+            todo.extend((v, level + 1) for v in item.values())
+        elif isinstance(item, list):
+            todo.extend((v, level + 1) for v in item)
+    return depth
 
 
 def _vector(data: dict[str, Any], key: str, source: str) -> NDArray[np.float64]:
@@ -142,6 +200,12 @@ def model_from_dict(data: dict[str, Any], source: str = "<dict>") -> GravityMode
         raise CalibrationFileError(f"{source}: 'base_tilt_deg' must be an object {{U, V}}")
     U = _number(tilt, "U", f"{source}: base_tilt_deg")
     V = _number(tilt, "V", f"{source}: base_tilt_deg")
+    for name, value in (("U", U), ("V", V)):
+        if not abs(value) < 90.0:
+            raise CalibrationFileError(
+                f"{source}: base_tilt_deg.{name} = {value:g} deg; a base tilt must be within "
+                "+-90 deg (and is a fraction of a degree on a level floor)"
+            )
     weight = _number(data, "tool_weight_N", source)
     if weight < 0.0:
         raise CalibrationFileError(f"{source}: 'tool_weight_N' must be >= 0, got {weight}")
@@ -200,6 +264,14 @@ def load_calibration(path: str | os.PathLike[str]) -> Calibration:
         raise CalibrationFileError(
             f"{source}: not valid JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})"
         ) from None
+    except RecursionError:
+        raise CalibrationFileError(
+            f"{source}: JSON nested too deeply to be a calibration"
+        ) from None
+    except ValueError as exc:  # an integer too long to parse
+        raise CalibrationFileError(f"{source}: not valid JSON ({exc})") from None
+    if _depth(data, _MAX_DEPTH) > _MAX_DEPTH:
+        raise CalibrationFileError(f"{source}: JSON nested too deeply to be a calibration")
     if not isinstance(data, dict):
         raise CalibrationFileError(f"{source}: expected a JSON object")
     if data.get("format") != FORMAT:
@@ -211,6 +283,7 @@ def load_calibration(path: str | os.PathLike[str]) -> Calibration:
             f"{source}: 'method' must be 'paper' or 'joint', got {data.get('method')!r}"
         )
     model = model_from_dict(data, source)
+    check_plausible(model, source)
     se_data = _object(data.get("std_errors"))
     se_tilt = _object(se_data.get("base_tilt_deg"))
 

@@ -14,7 +14,6 @@ from pathlib import Path
 from typing import Final
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import FtcompError, InputFileError
 from ftcomp.frames import ENCODING_COLUMNS, OrientationEncoding, rotation_from_encoding
@@ -24,6 +23,10 @@ __all__ = ["read_pose_file"]
 
 #: Optional position columns of a pose file: the sensor origin, base frame [m].
 _POSITION_COLUMNS: Final = ("x_m", "y_m", "z_m")
+#: Rows of one pose id may differ by this much (Frobenius norm between rotation matrices; the
+#: same tolerance as ``calibrate``'s) and by this much in position [m].
+_SAME_ORIENTATION: Final = 1e-3
+_SAME_POSITION_M: Final = 1e-4
 
 
 def read_pose_file(path: str | os.PathLike[str]) -> PoseList:
@@ -90,11 +93,28 @@ def read_pose_file(path: str | os.PathLike[str]) -> PoseList:
     order = list(dict.fromkeys(labels))
     if len(order) == len(labels):
         return PoseList(tuple(labels), rotations, source, positions)
+    # One rule with `calibrate`: rows that share a pose id are readings at one pose, so they
+    # must agree on where that pose is; the pose is visited once, as given.
     label_arr = np.array(labels)
-    groups = [np.flatnonzero(label_arr == lab) for lab in order]
-    means = Rotation.concatenate([rotations[g].mean() for g in groups])
-    mean_pos = None if positions is None else np.array([positions[g].mean(0) for g in groups])
-    return PoseList(tuple(order), means, source, mean_pos)
+    matrices = rotations.as_matrix()
+    first_rows = []
+    for label in order:
+        rows = np.flatnonzero(label_arr == label)
+        spread = np.linalg.norm(matrices[rows] - matrices[rows[0]], axis=(1, 2))
+        moved = (
+            np.zeros(len(rows), dtype=bool)
+            if positions is None
+            else np.any(np.abs(positions[rows] - positions[rows[0]]) > _SAME_POSITION_M, axis=1)
+        )
+        mismatch = np.flatnonzero((spread > _SAME_ORIENTATION) | moved)
+        if mismatch.size:
+            raise InputFileError(
+                f"{source}: pose {label!r} is given twice at different poses (rows "
+                f"{rows[0] + 1} and {rows[mismatch[0]] + 1}); one pose id must be one pose"
+            )
+        first_rows.append(int(rows[0]))
+    kept = positions[first_rows] if positions is not None else None
+    return PoseList(tuple(order), rotations[first_rows], source, kept)
 
 
 def _is_float(cell: str) -> bool:
