@@ -44,12 +44,16 @@ def register(p: argparse.ArgumentParser) -> None:
     p.add_argument("--load-kg", type=float, default=0.5, help="the load's mass [kg] (0.5)")
     p.add_argument("--seed", type=int, default=0, help="sensor-noise seed (0)")
     p.add_argument("--out", required=True, metavar="DIR")
+    p.add_argument(
+        "--force", action="store_true", help="write into an --out folder that already holds files"
+    )
     p.set_defaults(handler=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
     from ftcomp.experiments.placement import run_placement, write_placement_outputs
     from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig
+    from ftcomp.io.atomic import prepare_output_dir
     from ftcomp.io.calibration_json import load_calibration, save_calibration
     from ftcomp.sim.placement_cell import SimPlacementCell
 
@@ -67,6 +71,8 @@ def _run(args: argparse.Namespace) -> int:
         k1_m_per_N=k1_m,
         k2_m_per_s_N=k2_m,
     )
+    inputs = [args.calibration] if args.calibration is not None else []
+    prepare_output_dir(args.out, overwrite=args.force, inputs=inputs)
     given = load_calibration(args.calibration) if args.calibration is not None else None
     cell = SimPlacementCell(
         args.surface,
