@@ -27,6 +27,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "identify sensor bias, tool weight and centre of gravity, and base tilt",
     ),
     "compensate": ("ftcomp.cli.compensate", "remove bias and tool gravity from every reading"),
+    "import-bag": (
+        "ftcomp.cli.import_bag",
+        "sample CSV from a ROS 2 / ROS 1 bag: wrenches, poses from tf or URDF, still segments",
+    ),
+    "export": ("ftcomp.cli.export", "write a calibration as ros2_control parameters (YAML)"),
     "demo": (
         "ftcomp.cli.demo",
         "run every experiment of the paper on the simulated cell and write a report",

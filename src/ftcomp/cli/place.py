@@ -45,6 +45,12 @@ def register(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="sensor-noise seed (0)")
     p.add_argument("--out", required=True, metavar="DIR")
     p.add_argument(
+        "--log",
+        metavar="RUN.mcap",
+        help="also log every cycle as MCAP (ROS 2 profile: raw and compensated WrenchStamped, "
+        "/tf, commanded twist) for rosbags, Foxglove, Lichtblick",
+    )
+    p.add_argument(
         "--force", action="store_true", help="write into an --out folder that already holds files"
     )
     p.set_defaults(handler=_run)
@@ -88,7 +94,14 @@ def _run(args: argparse.Namespace) -> int:
         f"calibration ({source}): G {model.weight_N:.4f} N, "
         f"U {math.degrees(model.tilt_U_rad):+.3f} deg, V {math.degrees(model.tilt_V_rad):+.3f} deg"
     )
-    result = run_placement(cell, model, config)
+    if args.log is None:
+        result = run_placement(cell, model, config)
+    else:
+        from ftcomp.ros2.mcap_log import McapLog
+
+        with McapLog(args.log, overwrite=args.force) as log:
+            result = run_placement(cell, model, config, sinks=[log])
+        print(f"wrote {args.log} ({sum(log.counts.values())} messages)")
     title = f"{args.control} on {args.surface}" + (
         ", no compensation" if args.no_compensation else ""
     )

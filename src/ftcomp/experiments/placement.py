@@ -223,6 +223,7 @@ def run_placement(
     *,
     sensor: WrenchSensor | None = None,
     mount: Mount | None = None,
+    sinks: Sequence[Callable[[Reading, NDArray[np.float64]], None]] = (),
 ) -> PlacementResult:
     """Set the grasped load down on the surface; never raises on bad sensor data.
 
@@ -234,6 +235,7 @@ def run_placement(
         sensor: read this instead of ``cell.sensor`` (e.g. a fault-injecting
             :class:`~ftcomp.hardware.faults.FaultySensor`).
         mount: the sensor frame on the robot's TCP (identity by default).
+        sinks: run after each controlled cycle, ``sink(reading, twist)`` (e.g. an MCAP log).
 
     Returns:
         The timeseries and metrics (see :func:`write_placement_outputs`).
@@ -256,7 +258,7 @@ def run_placement(
         compensator=GravityCompensator(model) if config.compensation else None,
     )
     step = _PlacementStep(cell, config, cycle.read(), up_base)
-    run_loop(cycle, step)
+    run_loop(cycle, step, sinks=sinks)
     decision_index = step.decision_index if step.decision_index is not None else len(step.rows) - 1
     placed = step.outcome in ("placed", "depth_reached")
     if step.outcome == "depth_reached":  # hold still, then let go and lift

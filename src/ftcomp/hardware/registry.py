@@ -39,9 +39,15 @@ __all__ = [
 ]
 
 #: Robot backends: URI scheme -> ``"module:factory"``, ``factory(uri: Uri) -> Robot``.
-ROBOT_BACKENDS: Mapping[str, str] = {"sim": "ftcomp.sim.backend:open_robot"}
+ROBOT_BACKENDS: Mapping[str, str] = {
+    "sim": "ftcomp.sim.backend:open_robot",
+    "ros2": "ftcomp.ros2.live:open_robot",
+}
 #: Sensor backends: scheme -> ``"module:factory"``, ``factory(uri, robot | None) -> WrenchSensor``.
-SENSOR_BACKENDS: Mapping[str, str] = {"sim": "ftcomp.sim.backend:open_sensor"}
+SENSOR_BACKENDS: Mapping[str, str] = {
+    "sim": "ftcomp.sim.backend:open_sensor",
+    "ros2": "ftcomp.ros2.live:open_sensor",
+}
 
 
 @dataclass(frozen=True)

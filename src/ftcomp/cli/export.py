@@ -1,0 +1,74 @@
+"""``ftcomp export ros2 CALIBRATION.json -o params.yaml --world-frame B --sensor-frame S``.
+
+Writes the calibration as ros2_control parameters (see :mod:`ftcomp.ros2.export`).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["register", "run"]
+
+
+def register(parser: argparse.ArgumentParser) -> None:
+    """Add the ``export`` command's arguments to its parser."""
+    parser.description = (
+        "Write a calibration as parameters a ros2_control user loads as they are: the "
+        "force_torque_sensor_broadcaster's offsets (the bias) with a "
+        "control_filters/GravityCompensationWrench filter (tool mass, centre of gravity, gravity "
+        "in the base frame with the identified tilt), and the admittance_controller's gravity "
+        "compensation (which can express neither tilt nor bias)."
+    )
+    parser.add_argument("target", choices=("ros2",), help="what to export to")
+    parser.add_argument("calibration", metavar="CALIBRATION.json")
+    parser.add_argument("-o", "--output", required=True, metavar="PARAMS.yaml")
+    parser.add_argument(
+        "--world-frame",
+        required=True,
+        metavar="B",
+        help="the robot's base frame (the frame the calibration's tilt refers to)",
+    )
+    parser.add_argument(
+        "--sensor-frame", required=True, metavar="S", help="the sensor's measuring frame"
+    )
+    parser.add_argument(
+        "--sensor-name",
+        metavar="NAME",
+        help="the sensor's name in the ros2_control hardware description (default: S)",
+    )
+    parser.add_argument(
+        "--broadcaster-name",
+        default="force_torque_sensor_broadcaster",
+        metavar="NAME",
+        help="controller name of the broadcaster (force_torque_sensor_broadcaster)",
+    )
+    parser.add_argument(
+        "--admittance-name",
+        default="admittance_controller",
+        metavar="NAME",
+        help="controller name of the admittance controller (admittance_controller)",
+    )
+    parser.add_argument("--force", action="store_true", help="replace an existing output file")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Load, convert, write."""
+    from ftcomp.io.atomic import atomic_write_text, check_writable
+    from ftcomp.io.calibration_json import load_calibration
+    from ftcomp.ros2.export import ros2_control_parameters
+
+    output = check_writable(args.output, overwrite=args.force)
+    calibration = load_calibration(args.calibration)
+    text = ros2_control_parameters(
+        calibration.model,
+        world_frame=args.world_frame,
+        sensor_frame=args.sensor_frame,
+        sensor_name=args.sensor_name,
+        broadcaster=args.broadcaster_name,
+        admittance=args.admittance_name,
+        source=str(args.calibration),
+    )
+    atomic_write_text(output, text)
+    print(f"ros2_control parameters written to {output}")
+    return 0

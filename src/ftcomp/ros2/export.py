@@ -1,0 +1,162 @@
+"""A calibration as ros2_control parameters: the force/torque broadcaster, its gravity filter,
+and the admittance controller.
+
+What ros-controls computes (read from their code, versions in ``docs/ros2.md``):
+
+- ``force_torque_sensor_broadcaster`` (ros2_controllers): ``wrench = (raw + offset) * multiplier``
+  per axis (``apply_sensor_offset`` *adds* the offset), then the ``sensor_filter_chain``; the
+  result is published on ``~/wrench_filtered``. So ``offset = -[F0, M0]`` and ``multiplier = 1``.
+- ``control_filters/GravityCompensationWrench`` (control_toolbox): ``F_g = mass *
+  gravity_field`` is given in ``world_frame``; in the sensor frame ``g_s = R_sensor_world @ F_g``,
+  and it subtracts ``g_s`` from the force and ``CoG x g_s`` from the torque. With ``world_frame``
+  the robot's base ``B`` and ``gravity_field = R_world_base.T @ [0, 0, -g]`` (the identified base
+  tilt), ``mass * gravity_field`` is exactly ftcomp's ``gravity_base_N`` and the chain computes
+  what :class:`~ftcomp.compensation.compensator.GravityCompensator` does.
+- ``admittance_controller`` (ros2_controllers): subtracts ``CoG.force`` along ``-z`` of
+  ``fixed_world_frame`` and ``(R CoG.pos) x weight`` from the torque; it has no bias parameter and
+  no tilt: both are stated in a comment.
+
+Numbers are written with ``repr`` (shortest round trip) and always as doubles (``1.0e-05``, never
+``1e-05``, which a YAML 1.1 parser reads as a string), so the YAML holds the calibration exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+from ftcomp import __version__
+from ftcomp.constants import STANDARD_GRAVITY_MPS2
+from ftcomp.errors import ParameterError
+from ftcomp.model import GravityModel
+
+__all__ = ["ros2_control_parameters", "yaml_double"]
+
+#: The parameter definitions this export follows (see docs/ros2.md).
+SOURCES = (
+    "ros2_controllers 6.9.0: force_torque_sensor_broadcaster/src/"
+    "force_torque_sensor_broadcaster_parameters.yaml, admittance_controller/src/"
+    "admittance_controller_parameters.yaml",
+    "control_toolbox 6.3.0: control_toolbox/src/control_filters/"
+    "gravity_compensation_filter_parameters.yaml",
+)
+
+
+def yaml_double(value: float) -> str:
+    """``value`` as a YAML double that reads back exactly (``repr`` with a decimal point)."""
+    if not math.isfinite(value):
+        raise ParameterError(f"cannot export a non-finite number ({value})")
+    text = repr(float(value))
+    mantissa, e, exponent = text.partition("e")
+    if "." not in mantissa:
+        mantissa += ".0"
+    return mantissa + (e + exponent if e else "")
+
+
+def _list(values: Iterable[float]) -> str:
+    return "[" + ", ".join(yaml_double(float(v)) for v in values) + "]"
+
+
+def _check_name(kind: str, value: str) -> str:
+    if not value or any(c.isspace() or c in ":#{}[],'\"" for c in value):
+        raise ParameterError(f"{kind} {value!r}: must be a non-empty name without spaces or ':#'")
+    return value
+
+
+def ros2_control_parameters(
+    model: GravityModel,
+    *,
+    world_frame: str,
+    sensor_frame: str,
+    sensor_name: str | None = None,
+    broadcaster: str = "force_torque_sensor_broadcaster",
+    admittance: str = "admittance_controller",
+    source: str = "",
+) -> str:
+    """The parameter file (YAML text) for the broadcaster, its filter chain and the admittance.
+
+    Args:
+        model: the identified calibration.
+        world_frame: the robot's base frame ``B`` the calibration's tilt refers to.
+        sensor_frame: the sensor's measuring frame ``S`` (the broadcaster's ``frame_id``).
+        sensor_name: the sensor's name in the ros2_control hardware description (its state
+            interfaces ``<name>/force.x`` ...); default: ``sensor_frame``.
+        broadcaster: the broadcaster's controller name (the YAML's top-level key).
+        admittance: the admittance controller's name.
+        source: where the calibration came from (a comment).
+
+    Raises:
+        ParameterError: a name with spaces or YAML syntax in it.
+    """
+    names = {
+        "world frame": world_frame,
+        "sensor frame": sensor_frame,
+        "sensor name": sensor_name if sensor_name is not None else sensor_frame,
+        "broadcaster name": broadcaster,
+        "admittance controller name": admittance,
+    }
+    for kind, value in names.items():
+        _check_name(kind, value)
+    g = STANDARD_GRAVITY_MPS2
+    mass = model.weight_N / g
+    # A weightless tool: no direction to carry the tilt; the filter then subtracts nothing.
+    field = model.gravity_base_N / mass if mass > 0.0 else np.array([0.0, 0.0, -g])
+    F0, M0 = model.force_bias_N, model.torque_bias_Nm
+    U, V = math.degrees(model.tilt_U_rad), math.degrees(model.tilt_V_rad)
+    axes = "xyz"
+    force_offset = ", ".join(f"{a}: {yaml_double(-v)}" for a, v in zip(axes, F0, strict=True))
+    torque_offset = ", ".join(f"{a}: {yaml_double(-v)}" for a, v in zip(axes, M0, strict=True))
+    lines = [
+        f"# ros2_control parameters from ftcomp {__version__}"
+        + (f", calibration {source}" if source else ""),
+        f"# tool weight {model.weight_N:.6g} N (mass {mass:.6g} kg at g = {g} m/s^2), base tilt "
+        f"U {U:+.4f} deg, V {V:+.4f} deg",
+        "# Parameter definitions followed:",
+        *(f"#   {line}" for line in SOURCES),
+        f"{names['broadcaster name']}:",
+        "  ros__parameters:",
+        f"    frame_id: {sensor_frame}",
+        f"    sensor_name: {names['sensor name']}",
+        "    # The broadcaster ADDS the offset to the raw reading: offset = -(identified bias).",
+        "    offset:",
+        f"      force: {{{force_offset}}}",
+        f"      torque: {{{torque_offset}}}",
+        "    # Gravity compensation, published on ~/wrench_filtered: the tool's weight as",
+        f"    # mass * gravity_field in the robot's base frame {world_frame}; the field carries",
+        "    # the identified base tilt.",
+        "    sensor_filter_chain:",
+        "      filter1:",
+        "        type: control_filters/GravityCompensationWrench",
+        "        name: gravity_compensation",
+        "        params:",
+        f"          world_frame: {world_frame}",
+        f"          sensor_frame: {sensor_frame}",
+        "          tool:",
+        f"            CoG: {_list(model.center_of_gravity_m)}",
+        f"            mass: {yaml_double(mass)}",
+        f"            gravity_field: {_list(field)}",
+        f"{names['admittance controller name']}:",
+        "  ros__parameters:",
+        "    # admittance_controller reads the sensor's raw state interfaces and removes only the",
+        "    # tool's weight along -z of fixed_world_frame: it can express neither the sensor bias",
+        f"    # (F0 = {_list(F0)} N,",
+        f"    #  M0 = {_list(M0)} N*m stay in the signal)",
+        f"    # nor the base tilt (U {U:+.4f} deg, V {V:+.4f} deg): prefer the broadcaster's",
+        "    # wrench_filtered, or set fixed_world_frame to a frame whose z is truly vertical.",
+        "    ft_sensor:",
+        f"      name: {names['sensor name']}",
+        "      frame:",
+        f"        id: {sensor_frame}",
+        "    fixed_world_frame:",
+        "      frame:",
+        f"        id: {world_frame}",
+        "    gravity_compensation:",
+        "      frame:",
+        f"        id: {sensor_frame}",
+        "      CoG:",
+        f"        pos: {_list(model.center_of_gravity_m)}",
+        f"        force: {yaml_double(model.weight_N)}",
+    ]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,239 @@
+"""Calibration samples from a ROS bag: wrenches, the sensor's pose at each, still segments.
+
+:func:`import_bag` reads a ``WrenchStamped`` topic, puts the sensor's orientation in the base
+frame at each reading's stamp (from ``/tf`` + ``/tf_static``, or from joint states and the URDF),
+finds the still segments (:mod:`ftcomp.ros2.still`) and keeps their readings, one pose id per
+segment. :func:`write_bag_samples` writes them as a sample CSV that ``ftcomp calibrate`` reads:
+``pose, t_ns, t, qx, qy, qz, qw, fx, fy, fz, tx, ty, tz`` where ``t_ns`` is the reading's
+``header.stamp`` in integer nanoseconds (exact) and ``t`` the seconds since the first reading of
+the topic (the sample reader ignores ``t_ns`` as an extra column and reads ``t``).
+
+A wrench in another frame than the sensor frame is moved into it when a *fixed* transform joins
+the two (static tf, or only fixed joints in the URDF); otherwise it is an error.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from ftcomp.errors import InputFileError, ParameterError
+from ftcomp.frames import ENCODING_COLUMNS, encode_orientation
+from ftcomp.io.samples_csv import write_table
+from ftcomp.ros2.bag import open_bag, read_joint_states, read_transforms, read_wrenches
+from ftcomp.ros2.still import Segment, StillConfig, find_still_segments
+from ftcomp.ros2.tf import TransformTree
+from ftcomp.ros2.urdf import UrdfChain
+from ftcomp.samples import WRENCH_COLUMNS, Samples
+
+__all__ = ["BagImport", "import_bag", "write_bag_samples"]
+
+_NS = 1_000_000_000
+
+
+@dataclass(frozen=True)
+class BagImport:
+    """What :func:`import_bag` found.
+
+    Attributes:
+        source: the bag.
+        pose_source: how the poses were found (the tf chain, or the URDF and joint states).
+        wrench_note: how the readings' frame was handled.
+        t_ns: stamps of the kept readings [ns], shape (M,).
+        wrench_sensor: kept readings [N, N*m], sensor frame, shape (M, 6).
+        R_base_sensor: their orientations, shape (M, 3, 3).
+        pose_ids: the segment id of each kept reading, shape (M,).
+        segments: the still segments, in time order (pose id ``k + 1`` for ``segments[k]``).
+        t0_ns: stamp of the topic's first reading [ns] (the CSV's ``t`` counts from it).
+        readings_total: readings on the wrench topic.
+        readings_without_pose: readings outside the recorded span of the pose source.
+        unsettled: still orientations dropped because the wrench never settled.
+        still: the thresholds used.
+        warnings: things that look wrong but were accepted.
+    """
+
+    source: str
+    pose_source: str
+    wrench_note: str
+    t_ns: NDArray[np.int64] = field(repr=False)
+    wrench_sensor: NDArray[np.float64] = field(repr=False)
+    R_base_sensor: NDArray[np.float64] = field(repr=False)
+    pose_ids: NDArray[np.str_] = field(repr=False)
+    segments: tuple[Segment, ...]
+    t0_ns: int
+    readings_total: int
+    readings_without_pose: int
+    unsettled: int
+    still: StillConfig
+    warnings: tuple[str, ...] = ()
+
+    def samples(self) -> Samples:
+        """The kept readings as :class:`~ftcomp.samples.Samples` (pose ids, ``t`` [s])."""
+        return Samples(
+            wrench_sensor=self.wrench_sensor,
+            R_base_sensor=self.R_base_sensor,
+            encoding="quaternion",
+            pose=self.pose_ids,
+            t=(self.t_ns - self.t0_ns) / _NS,
+            source=self.source,
+            warnings=self.warnings,
+        )
+
+
+def _transform_wrench(
+    wrench: NDArray[np.float64], p_S_F: NDArray[np.float64], R_S_F: Rotation
+) -> NDArray[np.float64]:
+    """A wrench given in frame F (torques about F's origin) expressed in S, about S's origin."""
+    force = R_S_F.apply(wrench[:, :3])
+    torque = R_S_F.apply(wrench[:, 3:]) + np.cross(p_S_F, force)
+    return np.hstack([force, torque])
+
+
+def _fixed_pose(
+    frame: str,
+    sensor_frame: str,
+    tree: TransformTree | None,
+    urdf: Path | None,
+    topic: str,
+    source: str,
+) -> tuple[NDArray[np.float64], Rotation]:
+    """Pose of ``frame`` in the sensor frame, when a fixed transform joins them."""
+    problem = f"{source}: readings on {topic} are in frame {frame!r}, not the sensor frame "
+    problem += f"{sensor_frame!r}"
+    if tree is not None:
+        if frame not in tree.frames:
+            raise InputFileError(f"{problem}, and {frame!r} is not in the tf tree")
+        if not tree.is_static(sensor_frame, frame):
+            raise InputFileError(f"{problem}, and the transform between them is not static")
+        p, R, _ = tree.lookup(sensor_frame, frame, np.zeros(1, dtype=np.int64))
+        return p[0], R[0]
+    assert urdf is not None
+    chain = UrdfChain(urdf, sensor_frame, frame)
+    if chain.joint_names:
+        raise InputFileError(
+            f"{problem}, and joints {', '.join(chain.joint_names)} move between them"
+        )
+    T = chain.forward({}, 1)[0]
+    return T[:3, 3], Rotation.from_matrix(T[:3, :3])
+
+
+def import_bag(
+    path: str | os.PathLike[str],
+    *,
+    wrench_topic: str,
+    base_frame: str,
+    sensor_frame: str,
+    still: StillConfig | None = None,
+    urdf: str | os.PathLike[str] | None = None,
+    joint_states_topic: str | None = None,
+) -> BagImport:
+    """Read a bag and keep the readings of its still segments (see the module docstring).
+
+    Args:
+        path: the bag (rosbag2 directory, ``.mcap``, ``.db3``, or ROS 1 ``.bag``).
+        wrench_topic: the ``geometry_msgs/msg/WrenchStamped`` topic.
+        base_frame: the frame the orientations are given in (the robot's base).
+        sensor_frame: the sensor's measuring frame.
+        still: the still-segment thresholds (defaults: :class:`StillConfig`).
+        urdf: with ``joint_states_topic``: take the pose from the joint states and this robot
+            description instead of ``/tf``.
+        joint_states_topic: the ``sensor_msgs/msg/JointState`` topic (with ``urdf``).
+
+    Raises:
+        InputFileError: an unreadable bag, a missing topic or frame, a wrench in an unexpected
+            frame, or no still segment.
+        ParameterError: ``urdf`` without ``joint_states_topic`` or the other way round.
+    """
+    if (urdf is None) != (joint_states_topic is None):
+        raise ParameterError("--urdf and --joint-states go together: give both or neither")
+    config = still if still is not None else StillConfig()
+    source = str(path)
+    urdf_path = Path(urdf) if urdf is not None else None
+    tree: TransformTree | None = None
+    with open_bag(path) as reader:
+        series = read_wrenches(reader, wrench_topic, source)
+        if urdf_path is None:
+            tree = read_transforms(reader, source)
+            frames = tree.chain(base_frame, sensor_frame)
+            _, R, valid = tree.lookup(base_frame, sensor_frame, series.t_ns)
+            pose_source = "tf " + " -> ".join(frames)
+        else:
+            assert joint_states_topic is not None
+            chain = UrdfChain(urdf_path, base_frame, sensor_frame)
+            states = read_joint_states(reader, joint_states_topic, source)
+            _, R, valid = chain.sensor_poses(states, series.t_ns, source)
+            pose_source = (
+                f"{urdf_path.name} ({base_frame} -> {sensor_frame}, joints "
+                f"{', '.join(chain.joint_names) or 'none'}) + {joint_states_topic}"
+            )
+    frame = series.frame_id
+    wrench = series.wrench
+    if not frame:
+        raise InputFileError(
+            f"{source}: readings on {wrench_topic} have an empty header.frame_id; "
+            f"expected the sensor frame {sensor_frame!r}"
+        )
+    if frame == sensor_frame:
+        note = f"readings in the sensor frame {sensor_frame!r}"
+    else:
+        p_S_F, R_S_F = _fixed_pose(frame, sensor_frame, tree, urdf_path, wrench_topic, source)
+        wrench = _transform_wrench(wrench, p_S_F, R_S_F)
+        note = f"readings moved from frame {frame!r} into {sensor_frame!r} (fixed transform)"
+    if not valid.any():
+        raise InputFileError(
+            f"{source}: no reading on {wrench_topic} falls within the recorded poses "
+            f"({pose_source})"
+        )
+    t_kept = series.t_ns[valid]
+    R_kept = R[np.flatnonzero(valid)]
+    segments, unsettled = find_still_segments(t_kept, R_kept, wrench[valid], config)
+    if not segments:
+        extra = f" ({unsettled} held orientations where the wrench never settled)"
+        raise InputFileError(
+            f"{source}: no still period on {wrench_topic}"
+            + (extra if unsettled else "")
+            + f"; thresholds: {config.describe()}"
+        )
+    rows = np.concatenate([np.arange(s.start, s.stop) for s in segments])
+    ids = np.concatenate([np.full(s.readings, str(k + 1)) for k, s in enumerate(segments)])
+    return BagImport(
+        source=source,
+        pose_source=pose_source,
+        wrench_note=note,
+        t_ns=t_kept[rows],
+        wrench_sensor=wrench[valid][rows],
+        R_base_sensor=R_kept[rows].as_matrix(),
+        pose_ids=ids,
+        segments=tuple(segments),
+        t0_ns=int(series.t_ns[0]),
+        readings_total=len(series.t_ns),
+        readings_without_pose=int(np.count_nonzero(~valid)),
+        unsettled=unsettled,
+        still=config,
+        warnings=series.warnings,
+    )
+
+
+def write_bag_samples(path: str | os.PathLike[str], result: BagImport) -> None:
+    """Write the kept readings as a sample CSV (columns in the module docstring), atomically."""
+    quat = encode_orientation(Rotation.from_matrix(result.R_base_sensor), "quaternion")
+    header = ("pose", "t_ns", "t", *ENCODING_COLUMNS["quaternion"], *WRENCH_COLUMNS)
+    t_s = (result.t_ns - result.t0_ns) / _NS
+    rows = [
+        (
+            pid,
+            str(int(t)),
+            f"{ts:.9f}",
+            *(f"{v:.10g}" for v in q),
+            *(f"{v:.10g}" for v in w),
+        )
+        for pid, t, ts, q, w in zip(
+            result.pose_ids, result.t_ns, t_s, quat, result.wrench_sensor, strict=True
+        )
+    ]
+    write_table(path, header, rows)

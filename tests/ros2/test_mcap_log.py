@@ -1,0 +1,113 @@
+"""MCAP logs of control loops: written as a run_loop sink, read back with rosbags."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rosbags.highlevel import AnyReader
+from scipy.spatial.transform import Rotation
+
+from ftcomp.calibration.identify import calibrate
+from ftcomp.cli import main
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.control.loop import Reading
+from ftcomp.errors import ParameterError
+from ftcomp.io.calibration_json import save_calibration
+from ftcomp.model import GravityModel
+from ftcomp.ros2.mcap_log import TOPICS, McapLog
+
+from conftest import synthetic_samples
+
+
+def _read(path: Path) -> dict[str, list[tuple[int, object]]]:
+    out: dict[str, list[tuple[int, object]]] = {}
+    with AnyReader([path]) as reader:
+        for conn in reader.connections:
+            assert TOPICS[conn.topic] == conn.msgtype
+        for conn, t, raw in reader.messages():
+            out.setdefault(conn.topic, []).append((t, reader.deserialize(raw, conn.msgtype)))
+    return out
+
+
+def _vec(v) -> list[float]:
+    return [v.x, v.y, v.z]
+
+
+def test_every_cycle_is_logged_with_its_values_and_stamps(tmp_path: Path, rng) -> None:
+    path = tmp_path / "run.mcap"
+    readings = []
+    with McapLog(path, base_frame="base_link", sensor_frame="ft") as log:
+        for k in range(5):
+            raw = rng.normal(size=6)
+            contact = raw - 1.0 if k != 3 else np.full(6, np.nan)  # a fault stays visible
+            R = Rotation.random(rng=rng).as_matrix()
+            reading = Reading(
+                1000 * k + 7, 10**9 + 1000 * k, raw, contact, rng.normal(size=3), R, R
+            )
+            twist = rng.normal(size=6)
+            log(reading, twist)
+            readings.append((reading, twist))
+    assert path.is_file() and [p.name for p in tmp_path.iterdir()] == ["run.mcap"]
+    logged = _read(path)
+    assert {topic: len(msgs) for topic, msgs in logged.items()} == dict.fromkeys(TOPICS, 5)
+    for k, (reading, twist) in enumerate(readings):
+        t_raw, raw = logged["/ftcomp/wrench_raw"][k]
+        assert t_raw == reading.now_ns
+        assert raw.header.frame_id == "ft"
+        assert raw.header.stamp.sec * 10**9 + raw.header.stamp.nanosec == reading.t_sample_ns
+        assert (
+            _vec(raw.wrench.force) + _vec(raw.wrench.torque) == reading.wrench_raw_sensor.tolist()
+        )
+        comp = logged["/ftcomp/wrench_compensated"][k][1].wrench
+        np.testing.assert_array_equal(
+            _vec(comp.force) + _vec(comp.torque), reading.wrench_contact_sensor
+        )
+        tf = logged["/tf"][k][1].transforms[0]
+        assert (tf.header.frame_id, tf.child_frame_id) == ("base_link", "ft")
+        q = tf.transform.rotation
+        R = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()
+        np.testing.assert_allclose(R, reading.R_base_sensor, atol=1e-12)
+        tw = logged["/ftcomp/twist_command"][k][1].twist
+        assert _vec(tw.linear) + _vec(tw.angular) == twist.tolist()
+
+
+def test_an_existing_log_is_kept(tmp_path: Path) -> None:
+    path = tmp_path / "run.mcap"
+    path.write_text("earlier run")
+    with pytest.raises(ParameterError, match=r"run\.mcap: exists"):
+        McapLog(path)
+    assert path.read_text() == "earlier run"
+
+
+def test_sim_place_log_reads_back_with_every_topic_and_message_count(
+    tmp_path: Path, identified_tool: GravityModel, rng, capsys: pytest.CaptureFixture[str]
+) -> None:
+    cal = tmp_path / "cal.json"
+    calibration = calibrate(synthetic_samples(rng, identified_tool, readings=200))
+    save_calibration(cal, calibration)
+    identified = calibration.model
+    out, log = tmp_path / "run", tmp_path / "run.mcap"
+    place = ["sim", "place", "--surface", "book", "--control", "admittance", "-c", str(cal)]
+    assert main([*place, "--out", str(out), "--log", str(log)]) == 0
+    printed = capsys.readouterr().out
+    logged = _read(log)
+    counts = {topic: len(msgs) for topic, msgs in logged.items()}
+    cycles = counts["/ftcomp/wrench_raw"]
+    assert counts == dict.fromkeys(TOPICS, cycles)
+    assert f"wrote {log} ({4 * cycles} messages)" in printed
+    with (out / "timeseries.csv").open() as handle:
+        rows = sum(1 for _ in csv.DictReader(handle))
+    assert cycles == rows - 1  # the last step logs its row, then ends the loop
+    # The compensated wrench is the raw one less the calibration's bias and tool gravity at
+    # the logged pose.
+    compensator = GravityCompensator(identified)
+    for k in range(0, cycles, 97):
+        raw = logged["/ftcomp/wrench_raw"][k][1].wrench
+        comp = logged["/ftcomp/wrench_compensated"][k][1].wrench
+        q = logged["/tf"][k][1].transforms[0].transform.rotation
+        R = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()
+        expected = compensator.compensate(_vec(raw.force) + _vec(raw.torque), R)
+        np.testing.assert_allclose(_vec(comp.force) + _vec(comp.torque), expected, atol=1e-9)
