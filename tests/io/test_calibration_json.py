@@ -198,3 +198,20 @@ def test_an_absurd_calibration_is_never_written(tmp_path: Path) -> None:
     with pytest.raises(CalibrationFileError, match="beyond any plausible"):
         save_calibration(tmp_path / "out.json", absurd)
     assert not (tmp_path / "out.json").exists()
+
+
+def test_a_parameters_only_file_loads_and_saves_again(tmp_path: Path) -> None:
+    from ftcomp.io.calibration_json import model_to_dict
+    from ftcomp.model import GravityModel
+
+    model = GravityModel(
+        3.0, [0, 0, 0.05], [0.1, 0, 0], [0, 0.01, 0], tilt_U_rad=0.0, tilt_V_rad=0.0
+    )
+    minimal = tmp_path / "min.json"
+    minimal.write_text(json.dumps({"format": FORMAT, "method": "joint", **model_to_dict(model)}))
+    again = tmp_path / "again.json"
+    save_calibration(again, load_calibration(minimal))
+    back = load_calibration(again).model
+    assert back.weight_N == model.weight_N
+    np.testing.assert_array_equal(back.center_of_gravity_m, model.center_of_gravity_m)
+    assert json.loads(again.read_text())["std_errors"]["tool_weight_N"] is None

@@ -149,8 +149,20 @@ def save_calibration(path: str | os.PathLike[str], calibration: Calibration) -> 
         CalibrationFileError: a parameter beyond :data:`PLAUSIBLE_LIMITS` (nothing is written).
     """
     check_plausible(calibration.model, str(path))
-    text = json.dumps(calibration_to_dict(calibration), indent=2, allow_nan=False)
+    text = json.dumps(_finite_or_null(calibration_to_dict(calibration)), indent=2, allow_nan=False)
     atomic_write_text(path, text + "\n")
+
+
+def _finite_or_null(value: Any) -> Any:
+    """JSON-ready: a diagnostic nobody measured (NaN, e.g. a calibration loaded from a file with
+    only the parameters) becomes ``null``; the parameters are finite (checked)."""
+    if isinstance(value, dict):
+        return {k: _finite_or_null(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite_or_null(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
 
 
 def _number(data: dict[str, Any], key: str, source: str) -> float:
