@@ -20,6 +20,7 @@ _EXPORTS = {
     "GravityModel": "ftcomp.model",
     "LoadEstimate": "ftcomp.compensation.load",
     "Mount": "ftcomp.hardware.protocols",
+    "R_base_sensor_from": "ftcomp.frames",
     "Samples": "ftcomp.samples",
     "StandardErrors": "ftcomp.calibration.identify",
     "calibrate": "ftcomp.calibration.identify",
@@ -39,6 +40,7 @@ __all__ = [
     "GravityModel",
     "LoadEstimate",
     "Mount",
+    "R_base_sensor_from",
     "Samples",
     "StandardErrors",
     "__version__",
@@ -57,6 +59,7 @@ if TYPE_CHECKING:
     from ftcomp.compensation.compensator import GravityCompensator
     from ftcomp.compensation.load import LoadEstimate, estimate_load
     from ftcomp.errors import FtcompError
+    from ftcomp.frames import R_base_sensor_from
     from ftcomp.hardware.protocols import Mount
     from ftcomp.hardware.registry import open_robot, open_sensor
     from ftcomp.io.calibration_json import load_calibration, save_calibration

@@ -29,6 +29,7 @@ from ftcomp.errors import OrientationError, ParameterError
 __all__ = [
     "ENCODING_COLUMNS",
     "OrientationEncoding",
+    "R_base_sensor_from",
     "R_world_base_from_tilt",
     "encode_orientation",
     "gravity_in_base",
@@ -87,6 +88,27 @@ def rotation_from_encoding(encoding: OrientationEncoding, values: ArrayLike) -> 
     if encoding == "rotvec":
         return Rotation.from_rotvec(arr)
     return Rotation.from_euler(_PAPER_EULER_SEQ, arr, degrees=True)
+
+
+def R_base_sensor_from(encoding: OrientationEncoding, values: ArrayLike) -> NDArray[np.float64]:
+    """The rotation matrix ``R_base_sensor`` from a quaternion, rotation vector or paper angles.
+
+    The matrix form of :func:`rotation_from_encoding`, ready for
+    :meth:`ftcomp.GravityCompensator.compensate` and :meth:`ftcomp.GravityModel.predict`.
+
+    Args:
+        encoding: ``"quaternion"`` (``qx, qy, qz, qw``, scalar last, normalised),
+            ``"rotvec"`` (axis times angle [rad], as UR controllers report a TCP pose) or
+            ``"paper_euler"`` (``alpha, beta, gamma`` [deg], ``Rz(alpha) Ry(beta) Rx(gamma)``).
+        values: shape (k,) for one orientation or (N, k) for N of them.
+
+    Returns:
+        Shape (3, 3), or (N, 3, 3) for (N, k) values: maps sensor-frame vectors into the base.
+
+    Raises:
+        OrientationError: a zero-norm or non-finite quaternion, or values of the wrong width.
+    """
+    return np.asarray(rotation_from_encoding(encoding, values).as_matrix(), dtype=float)
 
 
 def encode_orientation(rotation: Rotation, encoding: OrientationEncoding) -> NDArray[np.float64]:

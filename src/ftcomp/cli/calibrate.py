@@ -1,4 +1,4 @@
-"""``ftcomp calibrate SAMPLES.csv -o calibration.json [--method paper|joint] [--json]``."""
+"""``ftcomp calibrate SAMPLES.csv [-o calibration.json] [--method paper|joint] [--json]``."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import json
 import math
 import sys
 
-import numpy as np
 from rich.console import Console
 from rich.table import Table
 
@@ -18,51 +17,101 @@ from ftcomp.io.calibration_json import calibration_to_dict, save_calibration
 from ftcomp.io.samples_csv import read_samples
 from ftcomp.samples import WRENCH_COLUMNS
 
-__all__ = ["console", "register", "render_calibration"]
+__all__ = ["console", "register", "render_calibration", "tilt_not_identified"]
 
 
 def register(parser: argparse.ArgumentParser) -> None:
     """Add the ``calibrate`` command's arguments to its parser."""
     parser.description = (
         "Identify F/T sensor bias, tool weight and centre of gravity, and the "
-        "robot base's tilt from readings at several poses (sample CSV)."
+        "robot base's tilt from readings at several poses (sample CSV). Prints every parameter "
+        "± its standard error, per-pose residuals and the paper's Table-3 errors; writes the "
+        "calibration file with -o, or prints it as JSON with --json."
     )
-    parser.add_argument("samples", metavar="SAMPLES.csv", help="sample CSV (see docs/files.md)")
-    parser.add_argument("-o", "--output", required=True, metavar="CALIBRATION.json")
+    parser.add_argument(
+        "samples",
+        metavar="SAMPLES.csv",
+        help="sample CSV: fx..tz [N, N·m] in the sensor frame, one orientation encoding, an "
+        "optional pose column (docs/files.md); at least 3 distinct poses, 4+ for the "
+        "leave-one-pose-out check",
+    )
+    parser.add_argument(
+        "-o",
+        "--output",
+        metavar="CALIBRATION.json",
+        help="write the calibration file here (ftcomp.calibration/1, docs/files.md) "
+        "(default: print only)",
+    )
     parser.add_argument(
         "--method",
         choices=("paper", "joint"),
         default="joint",
         help="paper: the paper's two-stage linear fit; joint: weighted joint nonlinear fit "
-        "(default)",
+        "(docs/calibration.md; default: joint)",
     )
     parser.add_argument(
         "--range",
         metavar="FORCE_N,TORQUE_NM",
         type=parse_range,
-        help="sensor range, e.g. 250,6: a reading beyond it is an error",
+        help="sensor range [N],[N·m], e.g. 250,6: a reading beyond it is an error "
+        "(default: no check)",
     )
-    parser.add_argument("--json", action="store_true", help="print the results as JSON")
-    parser.add_argument("--force", action="store_true", help="replace an existing output file")
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print the calibration file's content as JSON on stdout instead of tables "
+        "(with or without -o; default: tables)",
+    )
+    parser.add_argument(
+        "--force", action="store_true", help="replace an existing -o file (default: refuse)"
+    )
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Read, identify, write, print."""
-    output = check_writable(args.output, overwrite=args.force, inputs=[args.samples])
+    output = None
+    if args.output is not None:
+        output = check_writable(args.output, overwrite=args.force, inputs=[args.samples])
     force_range, torque_range = args.range if args.range else (None, None)
     samples = read_samples(args.samples, force_range_N=force_range, torque_range_Nm=torque_range)
     print_warnings(samples.warnings)
     result = calibrate(samples, method=args.method)
-    save_calibration(output, result)
+    if output is not None:
+        save_calibration(output, result)
     if args.json:
         print(json.dumps(calibration_to_dict(result), indent=2, allow_nan=False))
+        hidden = tilt_not_identified(result)
+        print_warnings([hidden] if hidden is not None else [])
     else:
         out = console()
         render_calibration(result, out)
-        out.print(f"calibration written to [bold]{output}[/bold]")
+        if output is not None:
+            out.print(f"calibration written to [bold]{output}[/bold]")
+        else:
+            out.print("calibration not written (give -o CALIBRATION.json to keep it)")
     print_warnings(w for w in result.warnings if w not in samples.warnings)
     return 0
+
+
+def tilt_not_identified(result: Calibration) -> str | None:
+    """A sentence when |U| or |V| is below its standard error (the poses cannot tell the tilt
+    from a level base), else None."""
+    m, se = result.model, result.std_errors
+    hidden = [
+        f"|{name}| = {math.degrees(abs(value)):.3f} deg < {math.degrees(error):.3f} deg"
+        for name, value, error in (
+            ("U", m.tilt_U_rad, se.tilt_U_rad),
+            ("V", m.tilt_V_rad, se.tilt_V_rad),
+        )
+        if math.isfinite(error) and abs(value) < error
+    ]
+    if not hidden:
+        return None
+    return (
+        f"tilt not identified: {', '.join(hidden)} (its standard error); these poses and "
+        "readings cannot tell the tilt from a level base"
+    )
 
 
 def _pm(value: float, se: float, scale: float = 1.0, digits: int = 4) -> str:
@@ -127,10 +176,15 @@ def render_calibration(result: Calibration, console: Console) -> None:
     console.print(poses)
     force_rms, torque_rms = result.residual_rms
     loo_force, loo_torque = result.loo_rms
+    if math.isfinite(loo_force) and math.isfinite(loo_torque):
+        loo = f"force {loo_force:.4f} N, torque {loo_torque:.5f} N·m"
+    else:
+        loo = f"needs at least 4 poses ({len(result.pose_ids)} given)"
     console.print(
         f"residual RMS: force {force_rms:.4f} N, torque {torque_rms:.5f} N·m; "
-        f"leave-one-pose-out RMS: force {loo_force:.4f} N, torque {loo_torque:.5f} N·m; "
+        f"leave-one-pose-out RMS: {loo}; "
         f"regressor condition number {result.condition_number:.2f}"
     )
-    if np.isnan(loo_force):
-        console.print("(leave-one-pose-out needs at least 4 poses)")
+    hidden = tilt_not_identified(result)
+    if hidden is not None:
+        console.print(f"[bold yellow]{hidden}[/bold yellow]")

@@ -1,7 +1,7 @@
 """``ftcomp sim collect``: static calibration readings from the simulated cell, with the truth.
 
 ``ftcomp sim collect --poses paper|FILE.csv --samples-per-pose 500 [--load-kg X]
-[--tilt-deg U V] [--no-gripper] [--seed N] -o samples.csv --truth truth.json``
+[--tilt-deg U V] [--no-gripper] [--seed N] -o samples.csv [--truth truth.json]``
 """
 
 from __future__ import annotations
@@ -30,40 +30,71 @@ MAX_SAMPLES_PER_POSE = 100_000
 def register(parser: argparse.ArgumentParser) -> None:
     """Add the ``collect`` command's arguments to its parser."""
     parser.description = (
-        "Drive the simulated arm to each pose, wait until it is still, record the "
-        "F/T sensor's readings (sample CSV) and write the true parameters (calibration-file "
-        "keys)."
+        "Drive the simulated arm to each pose, wait until it is still and record the F/T "
+        "sensor's readings (sample CSV for 'ftcomp calibrate'); with --truth, also write the "
+        "parameters the cell was built with, to score a calibration against."
     )
     parser.add_argument(
         "--poses",
         default="paper",
         metavar="paper|FILE.csv",
         help="'paper' for the 9 poses of the paper's Table 1, or a CSV with one orientation "
-        "encoding's columns (as in the sample CSV) and an optional pose column",
+        "encoding's columns (as in the sample CSV), an optional pose column and optional "
+        "x_m,y_m,z_m sensor positions [m] (default: paper)",
     )
-    parser.add_argument("--samples-per-pose", type=int, default=500, metavar="N")
-    parser.add_argument("--load-kg", type=float, metavar="X", help="grasp a load of X kg")
+    parser.add_argument(
+        "--samples-per-pose",
+        type=int,
+        default=500,
+        metavar="N",
+        help=f"readings recorded at each pose, 1..{MAX_SAMPLES_PER_POSE}, at the sensor's "
+        "1.2 kHz (default: 500, as the paper)",
+    )
+    parser.add_argument(
+        "--load-kg",
+        type=float,
+        metavar="X",
+        help="grasp a load of X kg (default: none, the empty gripper)",
+    )
     parser.add_argument(
         "--tilt-deg",
         type=float,
         nargs=2,
         default=paper.TILT_DEG,
         metavar=("U", "V"),
-        help="base mounting tilt [deg] (default: the paper's -0.204 -0.129)",
+        help="base mounting tilt [deg], R_world_base = Rx(U) Ry(V) (default: the paper's "
+        f"{paper.TILT_DEG[0]:g} {paper.TILT_DEG[1]:g})",
     )
     parser.add_argument(
-        "--no-gripper", action="store_true", help="bare sensing end (measures its weight)"
+        "--no-gripper",
+        action="store_true",
+        help="the bare sensing end, to measure its own weight (default: with the gripper)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="sensor-noise seed (default 0)")
+    parser.add_argument("--seed", type=int, default=0, help="sensor-noise seed, >= 0 (default: 0)")
     parser.add_argument(
         "--encoding",
         choices=tuple(ENCODING_COLUMNS),
         default="paper_euler",
-        help="orientation columns to write (default: the paper's angles)",
+        help="orientation columns to write: quaternion qx,qy,qz,qw; rotvec rx,ry,rz [rad]; "
+        "paper_euler alpha_deg,beta_deg,gamma_deg (default: paper_euler)",
     )
-    parser.add_argument("-o", "--output", required=True, metavar="SAMPLES.csv")
-    parser.add_argument("--truth", required=True, metavar="TRUTH.json")
-    parser.add_argument("--force", action="store_true", help="replace existing output files")
+    parser.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="SAMPLES.csv",
+        help="the sample CSV to write (required)",
+    )
+    parser.add_argument(
+        "--truth",
+        metavar="TRUTH.json",
+        help="also write the cell's true parameters under the calibration-file keys, with a "
+        "'simulation' section; not a calibration file (nothing was identified): read it with "
+        "ftcomp.io.calibration_json.model_from_dict (default: not written)",
+    )
+    parser.add_argument(
+        "--force", action="store_true", help="replace existing output files (default: refuse)"
+    )
     parser.set_defaults(handler=run)
 
 
@@ -84,7 +115,7 @@ def _check_args(args: argparse.Namespace) -> None:
     for name, value in zip(("U", "V"), args.tilt_deg, strict=True):
         if not math.isfinite(value) or abs(value) >= 30.0:
             raise ParameterError(f"--tilt-deg {name}={value} must be within +-30 deg")
-    if Path(args.output).resolve() == Path(args.truth).resolve():
+    if args.truth is not None and Path(args.output).resolve() == Path(args.truth).resolve():
         raise ParameterError(f"-o and --truth are the same file: {args.output}")
 
 
@@ -101,6 +132,7 @@ def robot_uri(args: argparse.Namespace) -> str:
 def run(args: argparse.Namespace) -> int:
     """``record`` on ``sim://``: open the cell by URI, record through the protocols, write the
     samples and the truth."""
+    from ftcomp.experiments.demo_calibration import TRUTH_HEADER
     from ftcomp.hardware.registry import open_robot, open_sensor
     from ftcomp.io.poses_csv import read_pose_file
     from ftcomp.paper import paper_poses
@@ -109,7 +141,9 @@ def run(args: argparse.Namespace) -> int:
     _check_args(args)
     inputs = [] if args.poses == "paper" else [args.poses]
     samples_path = check_writable(args.output, overwrite=args.force, inputs=inputs)
-    truth_path = check_writable(args.truth, overwrite=args.force, inputs=inputs)
+    truth_path = None
+    if args.truth is not None:
+        truth_path = check_writable(args.truth, overwrite=args.force, inputs=inputs)
     poses = paper_poses() if args.poses == "paper" else read_pose_file(args.poses)
     uri = robot_uri(args)
     with open_robot(uri) as robot, open_sensor("sim://", robot):
@@ -127,7 +161,11 @@ def run(args: argparse.Namespace) -> int:
         pose=samples.pose,
         t=samples.t,
     )
-    truth: dict[str, Any] = model_to_dict(truth_model)
+    where = f"{len(samples)} readings at {len(poses)} poses to {samples_path}"
+    if truth_path is None:
+        print(f"wrote {where}")
+        return 0
+    truth: dict[str, Any] = {**TRUTH_HEADER, **model_to_dict(truth_model)}
     truth["simulation"] = {
         "robot": uri,
         "poses": poses.source,
@@ -141,8 +179,5 @@ def run(args: argparse.Namespace) -> int:
         "sensor_resolution_fraction_of_range": spec.resolution_fraction_of_range,
     }
     atomic_write_text(truth_path, json.dumps(truth, indent=2, allow_nan=False) + "\n")
-    print(
-        f"wrote {len(samples)} readings at {len(poses)} poses to {samples_path}; "
-        f"truth to {truth_path}"
-    )
+    print(f"wrote {where}; truth to {truth_path}")
     return 0

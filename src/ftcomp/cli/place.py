@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 
 from ftcomp.errors import ParameterError
 
@@ -19,13 +20,40 @@ IDENTIFY_SAMPLES_PER_POSE = 200
 
 def register(p: argparse.ArgumentParser) -> None:
     """Add the ``place`` command's arguments to its parser."""
-    p.description = (
-        "Set a grasped load down on the simulated sponge or book with the paper's combined "
-        "admittance law (or position-only control). Writes timeseries.csv, metrics.json, "
-        "placement.png and the calibration used into --out."
+    from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig
+
+    gains = "; ".join(
+        f"{surface} k13 = {k1 * 1e3:g} mm/N, k23 = {k2 * 1e3:g} mm/(s*N)"
+        for surface, (k1, k2) in DEFAULT_GAINS.items()
     )
-    p.add_argument("--surface", choices=("sponge", "book"), required=True)
-    p.add_argument("--control", choices=("position", "admittance"), required=True)
+    default = PlacementConfig("admittance")
+    p.description = (
+        "Set a grasped load down on the simulated sponge or book. 'admittance' is the paper's "
+        "combined law (Eq. 27), dV = k13 d(dF)/dt + k23 dF along the base's z axis, on the "
+        "gravity-compensated force with desired force 0; default gains per surface: "
+        f"{gains}. The run counts as placed when the force it senses along gravity, filtered "
+        f"at {default.decision_cutoff_hz:g} Hz, stays within +-{default.band_N:g} N for "
+        f"{default.settle_time_s:g} s (position: when the descent reaches "
+        f"{default.position_depth_m * 1e3:g} mm below the surface's top); the gripper then "
+        "opens. The verdict comes from the true contact force: placed gently (the surface "
+        f"carries the load's weight within +-{default.gentle_press_N:g} N), pressed, released "
+        "early, or stopped (a safety limit or the "
+        f"{default.max_duration_s:g} s time-out ended the run: exit code 1). Writes "
+        "timeseries.csv, metrics.json, placement.png and the calibration used into --out."
+    )
+    p.add_argument(
+        "--surface",
+        choices=("sponge", "book"),
+        required=True,
+        help="sponge: a 1500 N/m spring pad; book: a stiff block (required)",
+    )
+    p.add_argument(
+        "--control",
+        choices=("position", "admittance"),
+        required=True,
+        help="position: constant-speed descent to a fixed depth, no force feedback (Fig. 6); "
+        "admittance: the combined law above (Fig. 7) (required)",
+    )
     p.add_argument(
         "-c",
         "--calibration",
@@ -35,23 +63,40 @@ def register(p: argparse.ArgumentParser) -> None:
         "9 poses)",
     )
     p.add_argument(
-        "--no-compensation", action="store_true", help="control on raw readings (Fig. 7)"
+        "--no-compensation",
+        action="store_true",
+        help="control on raw readings, bias and tool weight left in (Fig. 7) "
+        "(default: compensated)",
     )
-    p.add_argument("--k1", type=float, metavar="MM_PER_N", help="k13 [mm/N] (default per surface)")
     p.add_argument(
-        "--k2", type=float, metavar="MM_PER_S_PER_N", help="k23 [mm/(s*N)] (default per surface)"
+        "--k1",
+        type=float,
+        metavar="MM_PER_N",
+        help="admittance k13 [mm/N], >= 0 (default per surface, see above; not with "
+        "--control position)",
     )
-    p.add_argument("--load-kg", type=float, default=0.5, help="the load's mass [kg] (0.5)")
-    p.add_argument("--seed", type=int, default=0, help="sensor-noise seed (0)")
-    p.add_argument("--out", required=True, metavar="DIR")
+    p.add_argument(
+        "--k2",
+        type=float,
+        metavar="MM_PER_S_PER_N",
+        help="admittance k23 [mm/(s*N)], >= 0 (default per surface, see above; not with "
+        "--control position)",
+    )
+    p.add_argument("--load-kg", type=float, default=0.5, help="the load's mass [kg] (default: 0.5)")
+    p.add_argument("--seed", type=int, default=0, help="sensor-noise seed, >= 0 (default: 0)")
+    p.add_argument(
+        "--out", required=True, metavar="DIR", help="output folder for the run's files (required)"
+    )
     p.add_argument(
         "--log",
         metavar="RUN.mcap",
         help="also log every cycle as MCAP (ROS 2 profile: raw and compensated WrenchStamped, "
-        "/tf, commanded twist) for rosbags, Foxglove, Lichtblick",
+        "/tf, commanded twist) for rosbags, Foxglove, Lichtblick (default: no log)",
     )
     p.add_argument(
-        "--force", action="store_true", help="write into an --out folder that already holds files"
+        "--force",
+        action="store_true",
+        help="write into an --out folder that already holds files (default: refuse)",
     )
     p.set_defaults(handler=_run)
 
@@ -63,6 +108,11 @@ def _run(args: argparse.Namespace) -> int:
     from ftcomp.io.calibration_json import load_calibration, save_calibration
     from ftcomp.sim.placement_cell import SimPlacementCell
 
+    if args.control == "position" and (args.k1 is not None or args.k2 is not None):
+        raise ParameterError(
+            "--k1/--k2 are admittance gains; --control position descends without force "
+            "feedback and would ignore them"
+        )
     k1_default, k2_default = DEFAULT_GAINS[args.surface]
     k1_m = k1_default if args.k1 is None else args.k1 * 1e-3
     k2_m = k2_default if args.k2 is None else args.k2 * 1e-3
@@ -109,8 +159,12 @@ def _run(args: argparse.Namespace) -> int:
     save_calibration(paths["csv"].parent / "calibration_used.json", calibration)
     m = result.metrics
     print(
-        f"{title}: {m['stop_reason']}, final force {m['final_force_N']:+.3f} N, "
+        f"{title}: {m['stop_reason']}, sensed final force {m['final_force_N']:+.3f} N, "
         f"peak press {m['peak_press_N']:.3f} N, descent {m['descent_mm']:.2f} mm"
     )
+    print(f"verdict (true contact): {m['verdict']}: {m['verdict_reason']}")
     print(f"wrote {paths['csv'].parent}")
+    if m["verdict"] == "stopped":
+        print(f"error: placement failed: {m['verdict_reason']}", file=sys.stderr)
+        return 1
     return 0

@@ -1,8 +1,11 @@
 """``ftcomp demo``: every experiment of the paper on the simulated cell, with a report.
 
 Sections (each a function returning its metrics and its report section):
-calibration (2.2.1, Tables 1-2), continuous pose change (Fig. 5), Tables 3 and 4, placement
-(2.2.2, Fig. 6 and 7). Output folder: ``report.html`` with PNG figures beside it,
+calibration (2.2.1, Tables 1-2), continuous pose change (Fig. 5), Tables 3 and 4
+(:mod:`ftcomp.experiments.demo_gravity`), placement (2.2.2, Fig. 6 and 7,
+:mod:`ftcomp.experiments.demo_placement`). Then every published result is set beside ours
+(:mod:`ftcomp.experiments.comparisons`): a summary at the top of the report, the same rows in
+each section and in the terminal. Output folder: ``report.html`` with PNG figures beside it,
 ``metrics.json``, the calibration files and every run's CSV.
 """
 
@@ -11,7 +14,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -19,20 +22,13 @@ from typing import Any
 import numpy as np
 
 from ftcomp import paper
-from ftcomp.calibration.identify import Calibration
 from ftcomp.errors import ParameterError
-from ftcomp.experiments.demo_gravity import (
-    calibration_section,
-    continuous_section,
-    tables_section,
-)
-from ftcomp.experiments.placement import run_placement, sweep_gains, write_placement_outputs
-from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig, PlacementResult
+from ftcomp.experiments.comparisons import Comparison, compare_with_paper, comparison_rows
+from ftcomp.experiments.demo_calibration import calibration_section
+from ftcomp.experiments.demo_gravity import continuous_section, tables_section
+from ftcomp.experiments.demo_placement import placement_section
 from ftcomp.io.atomic import atomic_write_text, prepare_output_dir
-from ftcomp.io.calibration_json import model_to_dict
-from ftcomp.report.figures import plot_placement
-from ftcomp.report.html import Figure, Section, Table, write_report
-from ftcomp.sim.placement_cell import SimPlacementCell
+from ftcomp.report.html import Cell, Mark, Section, Table, write_report
 
 __all__ = ["MARKER_FILE", "DemoSettings", "prepare_output", "run_demo"]
 
@@ -79,151 +75,28 @@ class DemoSettings:
         return 2 + 2 + 6 + placement
 
 
-def _placement_section(
-    out: Path, settings: DemoSettings, calibration: Calibration, advance: Advance
-) -> tuple[dict[str, Any], Section]:
-    """Every placement run compensates with ``calibration``, identified on the simulated cell."""
-    published = paper.PUBLISHED["placement_test"]
-    k13 = float(published["k13_fixed_mm_per_N"])
-    sponge_k1, sponge_k2 = DEFAULT_GAINS["sponge"]
-    book_k1, book_k2 = DEFAULT_GAINS["book"]
-    sponge = PlacementConfig(control="admittance", k1_m_per_N=sponge_k1, k2_m_per_s_N=sponge_k2)
-    book = PlacementConfig(control="admittance", k1_m_per_N=book_k1, k2_m_per_s_N=book_k2)
-    k23 = sponge_k2 * 1e3
-    model = calibration.model
-    seeds = iter(range(settings.seed + 300, settings.seed + 400))
-    runs: dict[str, PlacementResult] = {}
-    labels: dict[str, str] = {}
-
-    def keep(name: str, title: str, result: PlacementResult) -> None:
-        runs[name], labels[name] = result, title
-        write_placement_outputs(result, out / "placement" / name, title=title)
-        advance(f"placement {name}")
-
-    plan: list[tuple[str, str, PlacementConfig, str]] = [
-        ("position_sponge", "sponge", replace(sponge, control="position"), "position only, sponge"),
-        ("position_book", "book", replace(book, control="position"), "position only, book"),
-        ("admittance_sponge", "sponge", sponge, "admittance, compensated, sponge"),
-        ("admittance_book", "book", book, "admittance, compensated, book"),
-        (
-            "admittance_uncompensated_sponge",
-            "sponge",
-            replace(sponge, compensation=False),
-            "admittance, uncompensated, sponge",
-        ),
-    ]
-    for name, surface, config, title in plan:
-        cell = SimPlacementCell(surface, 0.5, seed=next(seeds))
-        keep(name, title, run_placement(cell, model, config))
-
-    def sweep_title(gain: str, value: float) -> tuple[str, str]:
-        if gain == "k1":
-            k = value * 1e3
-            return f"k13_{k:g}", f"k13 = {k:g} mm/N, k23 = {k23:g} mm/(s·N)"
-        k = value * 1e3
-        return f"k23_{k:g}", f"k23 = {k:g} mm/(s·N), k13 = {k13:g} mm/N"
-
-    sweep_gains(
-        lambda: SimPlacementCell("sponge", 0.5, seed=next(seeds)),
-        model,
-        sponge,
-        k1_values_m_per_N=[k * 1e-3 for k in settings.k13_values_mm_per_N],
-        k2_values_m_per_s_N=[k * 1e-3 for k in settings.k23_values_mm_per_s_N],
-        on_run=lambda gain, value, result: keep(*sweep_title(gain, value), result),
-    )
-    plot_placement(
-        [runs["position_sponge"], runs["position_book"]],
-        out / "fig6_position_only.png",
-        labels=["sponge", "book"],
-        title="Fig. 6: position-only placement",
-    )
-    plot_placement(
-        [runs["admittance_sponge"], runs["admittance_uncompensated_sponge"]],
-        out / "fig7_compensation.png",
-        labels=["with compensation", "without compensation"],
-        title="Fig. 7a/b: admittance with and without compensation (sponge)",
-    )
-    k13_names = [f"k13_{k:g}" for k in settings.k13_values_mm_per_N]
-    k23_names = [f"k23_{k:g}" for k in settings.k23_values_mm_per_s_N]
-    plot_placement(
-        [runs[n] for n in k13_names],
-        out / "fig7_k13_sweep.png",
-        labels=[labels[n] for n in k13_names],
-        title="Fig. 7a: k13 sweep (sponge)",
-    )
-    plot_placement(
-        [runs[n] for n in k23_names],
-        out / "fig7_k23_sweep.png",
-        labels=[labels[n] for n in k23_names],
-        title="Fig. 7c: k23 sweep (sponge)",
-    )
-    keys = (
-        "placed",
-        "final_force_N",
-        "peak_press_N",
-        "settle_time_s",
-        "descent_mm",
-        "max_velocity_mm_s",
-    )
-    metrics: dict[str, Any] = {name: dict(r.metrics) for name, r in runs.items()}
-    metrics["published"] = published
-    metrics["calibration_used"] = model_to_dict(model)
-    rows = [
+def comparison_table(comparisons: Sequence[Comparison], caption: str) -> Table:
+    """Published beside ours, one row per quantity, with the judgement and its reason."""
+    rows: list[list[Cell]] = [
         [
-            labels[name],
-            *(_cell_text(runs[name].metrics.get(k)) for k in keys),
-            str(runs[name].metrics.get("stop_reason", "")),
+            c.quantity,
+            c.paper,
+            c.ours,
+            Mark("yes" if c.reproduced else "no", "good" if c.reproduced else "bad"),
+            Mark(c.note, "note"),
         ]
-        for name in runs
+        for c in comparisons
     ]
-    section = Section(
-        title="4. Compliant placement (paper 2.2.2, Fig. 6 and 7)",
-        anchor="placement",
-        paragraphs=[
-            "A 500 g load is held 2 mm above a sponge (spring) or a book (stiff) and set down. "
-            "Position-only control descends at constant speed to a fixed depth and presses the "
-            "load into the surface (paper: final force "
-            f"{published['position_only_final_force_N']['sponge']} N "
-            f"on the sponge, {published['position_only_final_force_N']['book']} N on the book). "
-            "Admittance control on the compensated force lowers it, slows as the surface takes the "
-            f"weight and stops inside ±{published['stop_band_N']} N. Without compensation the bias "
-            "and tool weight stay in the signal and the placement decision goes wrong.",
-            f"Gains: sponge k13 = {sponge_k1 * 1e3:g} mm/N, k23 = {sponge_k2 * 1e3:g} mm/(s·N); "
-            f"book k13 = {book_k1 * 1e3:g}, k23 = {book_k2 * 1e3:g}. The book's contact with the "
-            "arm's servo in series is about 1.5e5 N/m, so the paper's k13 = 0.1 mm/N would make "
-            "the loop unstable there; and on our sponge (1500 N/m) the paper's k23 = 0.1 "
-            "mm/(s·N) settles with a 7 s time constant, so the sweeps fix k23 at 1 mm/(s·N) "
-            "(docs/control.md). Larger k23 places faster with more force ripple, as the paper "
-            "reports; larger k13 adds ripple but cannot place faster: on a contact of stiffness "
-            "k the force error decays at k·k23/(1 + k13·k).",
-            "Every run compensates with the calibration identified on the simulated cell in "
-            f"section 1 (joint method): G = {model.weight_N:.4f} N, "
-            f"P = {_vec(model.center_of_gravity_m)} m, F0 = {_vec(model.force_bias_N)} N, "
-            f"M0 = {_vec(model.torque_bias_Nm)} N·m, U = {math.degrees(model.tilt_U_rad):.3f}°, "
-            f"V = {math.degrees(model.tilt_V_rad):.3f}°; the placement scene has the same tilted "
-            "base. The simulator's truth only scores the runs (true contact force).",
-            "Each run's timeseries.csv, metrics.json and plot are in placement/<run>/.",
-        ],
-        tables=[Table("Placement runs", ["run", *keys, "ended by"], rows)],
-        figures=[
-            Figure("fig6_position_only.png", "Fig. 6: position-only placement on sponge and book"),
-            Figure(
-                "fig7_compensation.png",
-                "Fig. 7: admittance control with and without gravity compensation",
-            ),
-            Figure("fig7_k13_sweep.png", "Fig. 7: k13 sweep with k23 fixed"),
-            Figure("fig7_k23_sweep.png", "Fig. 7: k23 sweep with k13 fixed"),
-        ],
-    )
-    return metrics, section
+    header = ["quantity", "paper", "ftcomp", "reproduced", "why"]
+    return Table(caption, header, rows, text_columns=len(header))
 
 
-def _cell_text(value: Any) -> str:
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        return f"{value:.3f}" if math.isfinite(value) else "-"
-    return "-" if value is None else str(value)
+def _with_comparisons(section: Section, comparisons: Sequence[Comparison]) -> Section:
+    mine = [c for c in comparisons if c.section == section.anchor]
+    if not mine:
+        return section
+    table = comparison_table(mine, "Beside the paper")
+    return replace(section, tables=[table, *section.tables])
 
 
 def prepare_output(out_dir: str | Path, *, overwrite: bool = False) -> Path:
@@ -266,11 +139,11 @@ def run_demo(
     table3, table4, tables_sec = tables_section(out, settings, joint, paper_data, advance)
     timing["tables_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    place_metrics, place_section = _placement_section(out, settings, joint, advance)
+    place_metrics, place_section = placement_section(out, settings, joint, advance)
     timing["placement_s"] = time.perf_counter() - t0
     timing["total_s"] = time.perf_counter() - started
 
-    metrics = {
+    metrics: dict[str, Any] = {
         "calibration": calib_metrics,
         "continuous_pose": cont_metrics,
         "table3": table3,
@@ -284,7 +157,22 @@ def run_demo(
         },
         "timing": timing,
     }
-    atomic_write_text(out / "metrics.json", json.dumps(_json_ready(metrics), indent=2) + "\n")
+    metrics = _json_ready(metrics)
+    comparisons = compare_with_paper(metrics)
+    metrics["comparisons"] = comparison_rows(comparisons)
+    atomic_write_text(out / "metrics.json", json.dumps(metrics, indent=2) + "\n")
+    missed = [c for c in comparisons if not c.reproduced]
+    summary = Section(
+        title="Summary: the paper's results beside ours",
+        anchor="summary",
+        paragraphs=[
+            f"{len(comparisons) - len(missed)} of {len(comparisons)} published results "
+            "reproduced. Where one is not, the reason stands beside it; the sections below "
+            "give the details."
+        ],
+        tables=[comparison_table(comparisons, "The paper's results and ours")],
+    )
+    sections = [calib_section, cont_section, tables_sec, place_section]
     write_report(
         out / "report.html",
         "ftcomp: Huang et al. 2020 reproduced on a simulated robot cell",
@@ -294,7 +182,7 @@ def run_demo(
             "beside ours. Numbers: metrics.json; raw data: the CSV files in this folder.",
             f"Run time {timing['total_s']:.1f} s, seed {settings.seed}.",
         ],
-        [calib_section, cont_section, tables_sec, place_section],
+        [summary, *(_with_comparisons(s, comparisons) for s in sections)],
     )
     return metrics
 

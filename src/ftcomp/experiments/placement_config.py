@@ -13,6 +13,7 @@ from scipy import signal
 from ftcomp import paper
 from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import ParameterError
+from ftcomp.experiments.verdicts import judge_placement
 
 __all__ = [
     "COLUMNS",
@@ -60,6 +61,11 @@ class PlacementConfig:
             0.125 N per sample must fall well inside the band).
         band_N: placed when |filtered force along gravity| <= band_N ... [N]
         settle_time_s: ... for this long [s].
+        gentle_press_N: the verdict's tolerance on the *true* contact [N]: placed gently when
+            the surface carries the load's weight within this, pressed beyond it (see
+            :mod:`ftcomp.experiments.verdicts`). Five times the paper's band: the band is on the
+            sensed force, and the true force also carries the calibration's error (a few
+            hundredths of a newton with the paper's nine poses).
         approach_gap_m: clearance between load and surface at the start [m].
         position_speed_m_per_s: descent speed of the position-only mode [m/s].
         position_depth_m: position-only end point below the surface top [m] (the planned
@@ -87,6 +93,7 @@ class PlacementConfig:
     decision_cutoff_hz: float = 2.0
     band_N: float = 0.05
     settle_time_s: float = 0.3
+    gentle_press_N: float = 0.25
     approach_gap_m: float = 0.002
     position_speed_m_per_s: float = 0.004
     position_depth_m: float = 0.004
@@ -116,6 +123,7 @@ class PlacementConfig:
             "decision_cutoff_hz",
             "band_N",
             "settle_time_s",
+            "gentle_press_N",
             "approach_gap_m",
             "position_speed_m_per_s",
             "travel_margin_m",
@@ -148,6 +156,19 @@ def _ripple(values: NDArray[np.float64], dt: float) -> float:
         return 0.0
     trend = signal.sosfiltfilt(sos, values)
     return float(np.sqrt(np.mean((values - trend) ** 2)))
+
+
+def _contact_stiffness(
+    descent_mm: NDArray[np.float64], true_force_N: NDArray[np.float64]
+) -> float | None:
+    """Slope of the true contact force over the sensor's descent while in contact [N/mm]: the
+    surface and everything between it and the sensor, in series (None: too little contact)."""
+    finite = np.isfinite(descent_mm) & np.isfinite(true_force_N)
+    x, y = descent_mm[finite], true_force_N[finite]
+    if len(x) < 20 or np.ptp(x) < 0.01:
+        return None
+    slope = np.polyfit(x, y, 1)[0]
+    return float(slope) if math.isfinite(slope) else None
 
 
 def safety_limits(config: PlacementConfig) -> SafetyLimits:
@@ -185,9 +206,20 @@ def placement_metrics(
     in_contact = np.flatnonzero(true_force > 0.05 * weight_N)
     contact = slice(int(in_contact[0]), decision + 1) if len(in_contact) else slice(0, 0)
     hold = s["force_compensated_N"][decision + 1 : hold_end]
-    final_force = float(np.mean(hold)) if len(hold) > 10 else float(s["force_filtered_N"][decision])
+    if len(hold) > 10:  # decided: the mean over the hold
+        final_force = float(np.mean(hold))
+    elif placed:
+        final_force = float(s["force_filtered_N"][decision])
+    else:  # stopped: the reading that stopped it (the slow decision filter lags a sudden rise)
+        final_force = float(s["force_compensated_N"][decision])
+    final_true = float(true_force[-1]) if len(true_force) else 0.0
+    peak_press = max(0.0, float(np.max(s["force_true_contact_N"], initial=0.0)) - weight_N)
+    verdict = judge_placement(outcome, final_true, peak_press, weight_N, config.gentle_press_N)
     return {
         "placed": placed,
+        "verdict": verdict.verdict,
+        "true_press_N": verdict.true_press_N,
+        "verdict_reason": verdict.reason,
         "stop_reason": outcome,
         "control": config.control,
         "compensation": config.compensation,
@@ -195,8 +227,11 @@ def placement_metrics(
         "k2_mm_per_s_per_N": config.k2_m_per_s_N * 1e3,
         "load_weight_N": weight_N,
         "final_force_N": final_force,
-        "final_true_contact_N": float(true_force[-1]) if len(true_force) else 0.0,
-        "peak_press_N": max(0.0, float(np.max(s["force_true_contact_N"], initial=0.0)) - weight_N),
+        "final_true_contact_N": final_true,
+        "peak_press_N": peak_press,
+        "contact_stiffness_N_per_mm": _contact_stiffness(
+            s["displacement_mm"][contact], s["force_true_contact_N"][contact]
+        ),
         "settle_time_s": float(s["t_s"][decision]) if placed else None,
         "descent_mm": float(s["displacement_mm"][decision]),
         "max_velocity_mm_s": float(np.max(np.abs(s["velocity_mm_s"][run]), initial=0.0)),
