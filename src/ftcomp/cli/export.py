@@ -20,8 +20,16 @@ def register(parser: argparse.ArgumentParser) -> None:
         "compensation (which can express neither tilt nor bias)."
     )
     parser.add_argument("target", choices=("ros2",), help="what to export to")
-    parser.add_argument("calibration", metavar="CALIBRATION.json")
-    parser.add_argument("-o", "--output", required=True, metavar="PARAMS.yaml")
+    parser.add_argument(
+        "calibration", metavar="CALIBRATION.json", help="a calibration file from ftcomp calibrate"
+    )
+    parser.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="PARAMS.yaml",
+        help="the ros2_control parameter file to write",
+    )
     parser.add_argument(
         "--world-frame",
         required=True,

@@ -31,10 +31,13 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--urdf",
         metavar="ROBOT.urdf",
-        help="pose from this robot description (with --joint-states)",
+        help="take the sensor's pose from this robot description and --joint-states "
+        "(default: from /tf and /tf_static)",
     )
     parser.add_argument(
-        "--joint-states", metavar="TOPIC", help="sensor_msgs/JointState topic (with --urdf)"
+        "--joint-states",
+        metavar="TOPIC",
+        help="sensor_msgs/JointState topic, with --urdf (default: none, poses from /tf)",
     )
     still = parser.add_argument_group("still segments")
     still.add_argument(
@@ -72,7 +75,13 @@ def register(parser: argparse.ArgumentParser) -> None:
         default=d.torque_Nm,
         help=f"settled: ... [N*m] ({d.torque_Nm:g})",
     )
-    parser.add_argument("-o", "--output", required=True, metavar="SAMPLES.csv")
+    parser.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="SAMPLES.csv",
+        help="the sample CSV to write (pose ids per still segment, t_ns and t)",
+    )
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
     parser.set_defaults(handler=run)
 
