@@ -142,10 +142,6 @@ def _subparser(argv: list[str]) -> argparse.ArgumentParser:
 #: Commands other sessions are writing now whose help does not meet the rule yet: the test runs
 #: and reports them as expected failures until their owners fix them (then drop the entry).
 HELP_GAPS = {
-    "record": "-o has no help; --move-s, --settle-max-s, --drift-N-Nm do not say their default",
-    "stream": "-o has no help; -c does not say its default",
-    "run": "-c has no help; --k1-rot, --k2-rot, --stiffness, --wrench-desired, "
-    "--settle-band-N do not say their default",
 }
 
 

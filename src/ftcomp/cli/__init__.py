@@ -27,15 +27,21 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "identify sensor bias, tool weight and centre of gravity, and base tilt",
     ),
     "compensate": ("ftcomp.cli.compensate", "remove bias and tool gravity from every reading"),
+    "demo": (
+        "ftcomp.cli.demo",
+        "run every experiment of the paper on the simulated cell and write a report",
+    ),
     "import-bag": (
         "ftcomp.cli.import_bag",
         "sample CSV from a ROS 2 / ROS 1 bag: wrenches, poses from tf or URDF, still segments",
     ),
     "export": ("ftcomp.cli.export", "write a calibration as ros2_control parameters (YAML)"),
-    "demo": (
-        "ftcomp.cli.demo",
-        "run every experiment of the paper on the simulated cell and write a report",
+    "record": (
+        "ftcomp.cli.record",
+        "record calibration readings on a robot (robot-driven poses, or by hand with --manual)",
     ),
+    "stream": ("ftcomp.cli.stream", "log a sensor's readings, raw and compensated, at its rate"),
+    "run": ("ftcomp.cli.run", "run the compliant loop on a robot with a calibration"),
 }
 #: ``ftcomp sim`` commands: name -> (module, one-line help).
 SIM_COMMANDS: dict[str, tuple[str, str]] = {

@@ -41,11 +41,17 @@ __all__ = [
 #: Robot backends: URI scheme -> ``"module:factory"``, ``factory(uri: Uri) -> Robot``.
 ROBOT_BACKENDS: Mapping[str, str] = {
     "sim": "ftcomp.sim.backend:open_robot",
+    "ur": "ftcomp.hardware.ur:open_robot",
+    "fixed": "ftcomp.hardware.fixed:open_robot",
+    "replay": "ftcomp.hardware.replay:open_robot",
     "ros2": "ftcomp.ros2.live:open_robot",
 }
 #: Sensor backends: scheme -> ``"module:factory"``, ``factory(uri, robot | None) -> WrenchSensor``.
 SENSOR_BACKENDS: Mapping[str, str] = {
     "sim": "ftcomp.sim.backend:open_sensor",
+    "netft": "ftcomp.hardware.netft:open_sensor",
+    "ur": "ftcomp.hardware.ur_sensor:open_sensor",
+    "replay": "ftcomp.hardware.replay:open_sensor",
     "ros2": "ftcomp.ros2.live:open_sensor",
 }
 

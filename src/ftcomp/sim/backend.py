@@ -8,6 +8,8 @@ Robot URI options (all optional)::
           &grasp=1|0          start with the load in the gripper (default 0)
           &surface=none|sponge|book   what lies on the table (default none)
           &seed=N             sensor-noise seed (default 0)
+          &clearance_mm=X     start holding the grasped load X mm above the surface (needs
+                              grasp=1 and a surface; for ``ftcomp run`` placements)
 
 The sensor URI is ``sim://`` with no options: the cell's own sensor, which needs the robot to be
 ``sim://`` too (they share the simulation clock). The simulated TCP is the sensor frame, so the
@@ -17,6 +19,7 @@ mount is the identity.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from ftcomp import paper
 from ftcomp.errors import ParameterError
@@ -70,10 +73,28 @@ def scene_from_uri(uri: Uri) -> tuple[SceneConfig, int, bool]:
 
 def open_robot(uri: Uri) -> Robot:
     """A fresh simulated cell."""
-    scene, seed, grasp = scene_from_uri(uri)
+    clearance_mm = uri.options.get("clearance_mm")
+    options = {k: v for k, v in uri.options.items() if k != "clearance_mm"}
+    scene, seed, grasp = scene_from_uri(replace(uri, options=options))
     cell = SimCell(scene, seed=seed)
-    if grasp:
-        cell.grasp()
+    if clearance_mm is None:
+        if grasp:
+            cell.grasp()
+        return cell
+    try:
+        clearance_m = float(clearance_mm) * 1e-3
+    except ValueError:
+        clearance_m = math.nan
+    if not 0.0 <= clearance_m <= 0.1:
+        raise ParameterError(
+            f"{uri.text!r}: clearance_mm must be in [0, 100], got {clearance_mm!r}"
+        )
+    if not grasp or scene.surface == "none":
+        raise ParameterError(f"{uri.text!r}: clearance_mm needs grasp=1 and a surface")
+    # As the placement cell: grasp 20 mm up (empty on the way), then lower to the clearance.
+    cell.hold_above_surface(max(clearance_m, 0.02), 0.5)
+    cell.grasp()
+    cell.hold_above_surface(clearance_m, 0.3)
     return cell
 
 

@@ -1,0 +1,235 @@
+"""Calibration readings from a live cell, pose by pose, so nothing is lost when it stops.
+
+:func:`record_poses` drives the robot through a :class:`~ftcomp.samples.PoseList` with
+:func:`ftcomp.calibration.collect.record_static`, one pose at a time: it checks every pose is
+reachable before the first move (when the robot can tell, see
+:class:`~ftcomp.hardware.pacing.ChecksReachability`), moves, waits for the arm to come to rest,
+records ``samples_per_pose`` readings and re-records while the readings still drift (the
+wrench has not settled). Each finished pose goes to ``on_pose`` as a :class:`PoseRecord` at once,
+so a caller can write it out before the next move: a fault, a lost connection or Ctrl-C later
+loses nothing already recorded.
+
+The hand-guided variant (the user moves the arm, ftcomp notices each still period) is
+:mod:`ftcomp.calibration.collect_manual`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ftcomp.arrays import freeze_field
+from ftcomp.calibration.collect import record_static
+from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
+from ftcomp.hardware.pacing import ChecksReachability
+from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
+from ftcomp.samples import PoseList, Samples
+
+__all__ = [
+    "PoseRecord",
+    "WrenchTolerance",
+    "check_reachable",
+    "record_poses",
+    "samples_from_records",
+    "wrench_drift",
+]
+
+
+@dataclass(frozen=True)
+class PoseRecord:
+    """The readings recorded at one pose.
+
+    Attributes:
+        pose_id: the pose's label.
+        R_base_sensor: the sensor's measured orientation there, (3, 3).
+        p_base_sensor: the sensor origin there [m], base frame, (3,).
+        wrench_sensor: the readings [N, N*m], sensor frame, (n, 6).
+        t_ns: their stamps [ns] on the session's clock, (n,).
+    """
+
+    pose_id: str
+    R_base_sensor: NDArray[np.float64] = field(repr=False)
+    p_base_sensor: NDArray[np.float64] = field(repr=False)
+    wrench_sensor: NDArray[np.float64] = field(repr=False)
+    t_ns: NDArray[np.int64] = field(repr=False)
+
+    def __post_init__(self) -> None:
+        n = len(self.wrench_sensor)
+        if n < 1:
+            raise ParameterError(f"pose {self.pose_id}: no readings")
+        freeze_field(self, "R_base_sensor", (3, 3))
+        freeze_field(self, "p_base_sensor", (3,))
+        freeze_field(self, "wrench_sensor", (n, 6))
+        freeze_field(self, "t_ns", (n,), dtype=np.int64)
+
+    @property
+    def mean(self) -> NDArray[np.float64]:
+        """Mean reading [N, N*m], (6,)."""
+        return np.asarray(self.wrench_sensor.mean(axis=0))
+
+    @property
+    def scatter(self) -> NDArray[np.float64]:
+        """Standard deviation of one reading per channel [N, N*m], (6,) (0 for one reading)."""
+        if len(self.wrench_sensor) < 2:
+            return np.zeros(6)
+        return np.asarray(self.wrench_sensor.std(axis=0, ddof=1))
+
+
+@dataclass(frozen=True)
+class WrenchTolerance:
+    """How much the mean reading may move within a still window and still count as settled.
+
+    Attributes:
+        force_N: largest change of the force channels' mean between the window's halves [N].
+        torque_Nm: same for the torques [N*m].
+    """
+
+    force_N: float = 0.1
+    torque_Nm: float = 0.01
+
+    def __post_init__(self) -> None:
+        if not (self.force_N > 0.0 and self.torque_Nm > 0.0):
+            raise ParameterError("wrench tolerances must be > 0")
+
+
+def wrench_drift(wrench: ArrayLike) -> NDArray[np.float64]:
+    """``|mean(second half) - mean(first half)|`` per channel [N, N*m], (6,): how much the
+    readings drift over a window (zeros for fewer than two readings)."""
+    w = np.asarray(wrench, dtype=float).reshape(-1, 6)
+    if len(w) < 2:
+        return np.zeros(6)
+    half = len(w) // 2
+    return np.asarray(np.abs(w[half:].mean(axis=0) - w[:half].mean(axis=0)))
+
+
+def _settled(wrench: ArrayLike, tolerance: WrenchTolerance) -> bool:
+    drift = wrench_drift(wrench)
+    return bool(np.all(drift[:3] <= tolerance.force_N) and np.all(drift[3:] <= tolerance.torque_Nm))
+
+
+def check_reachable(
+    robot: Robot, poses: PoseList, mount: Mount, position_base_m: NDArray[np.float64]
+) -> None:
+    """Before any move: raise on the first pose the robot reports unreachable (robots that
+    cannot tell are checked by their own move, before it starts).
+
+    Raises:
+        UnreachablePoseError: naming the pose.
+    """
+    if not isinstance(robot, ChecksReachability):
+        return
+    for i, (label, rotation) in enumerate(zip(poses.ids, poses.rotations, strict=True)):
+        p = poses.positions_base_m[i] if poses.positions_base_m is not None else position_base_m
+        if not robot.is_reachable(*mount.tcp_pose(p, rotation.as_matrix())):
+            raise UnreachablePoseError(
+                f"pose {label} of {poses.source} is not reachable (inverse kinematics or safety "
+                "limits); nothing was moved"
+            )
+
+
+def record_poses(
+    robot: Robot,
+    sensor: WrenchSensor,
+    poses: PoseList,
+    samples_per_pose: int,
+    on_pose: Callable[[PoseRecord], None],
+    *,
+    mount: Mount | None = None,
+    position_base_m: ArrayLike | None = None,
+    move_duration_s: float = 2.0,
+    settle_max_s: float = 5.0,
+    tolerance: WrenchTolerance | None = None,
+    max_tries: int = 5,
+) -> None:
+    """Visit every pose and hand each one's readings to ``on_pose`` as soon as they are in.
+
+    Args:
+        robot: the arm (entered).
+        sensor: the F/T sensor (entered), on the robot's clock.
+        poses: sensor orientations (and optionally positions) to visit.
+        samples_per_pose: readings averaged at each pose, >= 2.
+        on_pose: called with each :class:`PoseRecord`, in order.
+        mount: the sensor frame on the TCP (identity by default).
+        position_base_m: the sensor origin for poses without a position [m], base frame;
+            None: where the sensor is when recording starts.
+        move_duration_s: about how long each move takes [s] (the robot caps the speed).
+        settle_max_s: longest wait for the arm to come to rest [s].
+        tolerance: how still the readings must be (see :class:`WrenchTolerance`).
+        max_tries: recordings at one pose before giving up on a drifting wrench.
+
+    Raises:
+        UnreachablePoseError: a pose cannot be reached (checked before the first move when
+            the robot can tell).
+        HardwareError: the wrench keeps drifting at a pose, the sensor goes silent, the
+            connection is lost.
+    """
+    if not (isinstance(samples_per_pose, int) and samples_per_pose >= 2):
+        raise ParameterError(f"samples_per_pose must be an integer >= 2, got {samples_per_pose}")
+    mount = mount if mount is not None else Mount()
+    tolerance = tolerance if tolerance is not None else WrenchTolerance()
+    if position_base_m is None:
+        here = robot.pose()
+        p_default = mount.sensor_pose(here.p_base_tcp, here.R_base_tcp)[0]
+    else:
+        p_default = np.asarray(position_base_m, dtype=float)
+        if p_default.shape != (3,) or not np.all(np.isfinite(p_default)):
+            raise ParameterError(f"position_base_m must be 3 finite numbers [m], got {p_default}")
+    check_reachable(robot, poses, mount, p_default)
+    for i, label in enumerate(poses.ids):
+        one = PoseList(
+            (label,),
+            poses.rotations[i : i + 1],
+            poses.source,
+            poses.positions_base_m[i : i + 1] if poses.positions_base_m is not None else None,
+        )
+        for _ in range(max_tries):
+            samples = record_static(
+                robot,
+                sensor,
+                one,
+                samples_per_pose,
+                mount=mount,
+                position_base_m=p_default,
+                move_duration_s=move_duration_s,
+                settle_max_s=settle_max_s,
+            )
+            if _settled(samples.wrench_sensor, tolerance):
+                break
+        else:
+            drift = wrench_drift(samples.wrench_sensor)
+            raise HardwareError(
+                f"pose {label} of {poses.source}: the readings kept drifting over {max_tries} "
+                f"recordings (force {drift[:3].max():.3f} N, torque {drift[3:].max():.4f} N*m "
+                f"between halves; tolerance {tolerance.force_N:g} N, {tolerance.torque_Nm:g} N*m)"
+            )
+        at = robot.pose()
+        assert samples.t is not None  # record_static stamps every reading
+        on_pose(
+            PoseRecord(
+                label,
+                samples.R_base_sensor[0],
+                mount.sensor_pose(at.p_base_tcp, at.R_base_tcp)[0],
+                samples.wrench_sensor,
+                np.round(samples.t * 1e9).astype(np.int64),
+            )
+        )
+
+
+def samples_from_records(records: Sequence[PoseRecord], source: str) -> Samples:
+    """All records as one :class:`~ftcomp.samples.Samples` (``pose`` ids, ``t`` in seconds)."""
+    if not records:
+        raise ParameterError(f"{source}: no poses recorded")
+    n = [len(r.wrench_sensor) for r in records]
+    return Samples(
+        wrench_sensor=np.concatenate([r.wrench_sensor for r in records]),
+        R_base_sensor=np.concatenate(
+            [np.broadcast_to(r.R_base_sensor, (k, 3, 3)) for r, k in zip(records, n, strict=True)]
+        ),
+        encoding="quaternion",
+        pose=np.repeat([r.pose_id for r in records], n),
+        t=np.concatenate([r.t_ns for r in records]).astype(np.float64) * 1e-9,
+        source=source,
+    )

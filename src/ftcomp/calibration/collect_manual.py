@@ -1,0 +1,179 @@
+"""Calibration readings from a hand-guided arm: record each period the user holds it still.
+
+The user jogs or free-drives the arm from pose to pose; :class:`ManualRecorder`, a step for
+:func:`ftcomp.control.loop.run_loop` that commands nothing, watches the sensor frame's pose and
+the readings every cycle:
+
+- a *still period* starts when the pose last moved beyond ``position_tol_m`` / ``angle_tol_rad``
+  from where the period started, and counts once it has lasted ``still_s`` with readings that do
+  not drift (:class:`~ftcomp.calibration.collect_live.WrenchTolerance`, the means of the
+  window's two halves); while the readings still drift, the window slides on;
+- a still period at an orientation within ``min_separation_rad`` of a pose already recorded is
+  ignored (it would add nothing to separate bias from gravity) and announced as such;
+- otherwise its readings (the last ``samples_per_pose`` of the window, by default its last three
+  quarters: the arm may still have been creeping into the pose when the window opened) become
+  the next :class:`~ftcomp.calibration.collect_live.PoseRecord`, announced at once;
+- after ``n_poses`` records the step ends the loop.
+
+Each still period is handled once: the arm must move beyond the tolerance before the next one.
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from ftcomp.calibration.collect_live import PoseRecord, WrenchTolerance, wrench_drift
+from ftcomp.errors import ParameterError
+from ftcomp.hardware.protocols import WrenchSensor
+
+if TYPE_CHECKING:
+    from ftcomp.control.loop import Reading
+
+__all__ = ["ManualEvent", "ManualRecorder", "StillCriteria"]
+
+
+@dataclass(frozen=True)
+class StillCriteria:
+    """When the arm counts as held still, and when a pose is new.
+
+    Attributes:
+        still_s: how long pose and readings must stay still [s].
+        position_tol_m: largest movement of the sensor origin within a still period [m].
+        angle_tol_rad: largest rotation within a still period [rad].
+        wrench: how little the readings may drift (see ``WrenchTolerance``).
+        min_separation_rad: a pose closer than this to a recorded one is ignored [rad].
+    """
+
+    still_s: float = 1.0
+    position_tol_m: float = 0.002
+    angle_tol_rad: float = math.radians(0.5)
+    wrench: WrenchTolerance = field(default_factory=WrenchTolerance)
+    min_separation_rad: float = math.radians(5.0)
+
+    def __post_init__(self) -> None:
+        for name in ("still_s", "position_tol_m", "angle_tol_rad"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ParameterError(f"{name} must be > 0, got {value}")
+        if not (math.isfinite(self.min_separation_rad) and self.min_separation_rad >= 0.0):
+            raise ParameterError(f"min_separation_rad must be >= 0, got {self.min_separation_rad}")
+
+
+@dataclass(frozen=True)
+class ManualEvent:
+    """What the recorder noticed.
+
+    Attributes:
+        kind: ``"recorded"`` (a new pose) or ``"too_close"`` (a still period ignored).
+        number: the new pose's number (1, 2, ...), or the number of the recorded pose it was
+            too close to.
+        angle_rad: the rotation to the nearest recorded pose before this one [rad] (inf for the
+            first).
+        record: the new pose's readings (None when ignored).
+    """
+
+    kind: Literal["recorded", "too_close"]
+    number: int
+    angle_rad: float
+    record: PoseRecord | None
+
+
+class ManualRecorder:
+    """A :func:`~ftcomp.control.loop.run_loop` step recording still periods (module docstring).
+
+    Args:
+        sensor: the loop's sensor (its ``read_new`` gives every reading).
+        n_poses: stop after this many poses, >= 1.
+        criteria: what counts as still and as new.
+        on_event: called with every :class:`ManualEvent` as it happens.
+        samples_per_pose: readings kept per pose (the window's last ones); None: the last
+            three quarters of the window.
+    """
+
+    def __init__(
+        self,
+        sensor: WrenchSensor,
+        n_poses: int,
+        criteria: StillCriteria,
+        on_event: Callable[[ManualEvent], None],
+        *,
+        samples_per_pose: int | None = None,
+    ) -> None:
+        if not (isinstance(n_poses, int) and n_poses >= 1):
+            raise ParameterError(f"the number of poses must be an integer >= 1, got {n_poses}")
+        if samples_per_pose is not None and samples_per_pose < 2:
+            raise ParameterError(f"samples_per_pose must be >= 2, got {samples_per_pose}")
+        self.sensor = sensor
+        self.n_poses = n_poses
+        self.criteria = criteria
+        self.on_event = on_event
+        self.samples_per_pose = samples_per_pose
+        self.records: list[PoseRecord] = []
+        self._zero = np.zeros(6)
+        self._still_ns = round(criteria.still_s * 1e9)
+        self._since_ns: int | None = None
+        self._ref: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+        self._window: collections.deque[tuple[int, NDArray[np.float64]]] = collections.deque()
+        self._handled = False
+
+    def _moved(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> bool:
+        assert self._ref is not None
+        p_ref, R_ref = self._ref
+        if float(np.linalg.norm(p - p_ref)) > self.criteria.position_tol_m:
+            return True
+        return float(Rotation.from_matrix(R_ref.T @ R).magnitude()) > self.criteria.angle_tol_rad
+
+    def _nearest(self, R: NDArray[np.float64]) -> tuple[int, float]:
+        """(number, angle [rad]) of the recorded pose nearest in orientation; (0, inf) if none."""
+        best = (0, math.inf)
+        for k, record in enumerate(self.records, start=1):
+            angle = float(Rotation.from_matrix(record.R_base_sensor.T @ R).magnitude())
+            if angle < best[1]:
+                best = (k, angle)
+        return best
+
+    def __call__(self, reading: Reading) -> NDArray[np.float64] | None:
+        """One cycle: take the new readings, follow the pose, record a still period."""
+        if len(self.records) >= self.n_poses:
+            return None
+        now, p, R = reading.now_ns, reading.p_base_sensor, reading.R_base_sensor
+        if self._ref is None or self._moved(p, R):
+            self._ref, self._since_ns, self._handled = (p.copy(), R.copy()), now, False
+            self._window.clear()
+            self.sensor.read_new()  # readings from before the stillness are of no use
+            return self._zero
+        assert self._since_ns is not None
+        for sample in self.sensor.read_new():
+            if sample.t_ns >= self._since_ns:
+                self._window.append((sample.t_ns, sample.wrench_sensor))
+        if self._handled or now - self._since_ns < self._still_ns or len(self._window) < 4:
+            return self._zero
+        wrench = np.array([w for _, w in self._window])
+        drift = wrench_drift(wrench)
+        tol = self.criteria.wrench
+        if np.any(drift[:3] > tol.force_N) or np.any(drift[3:] > tol.torque_Nm):
+            # Still settling: slide the window to its second half and wait on.
+            half = len(self._window) // 2
+            for _ in range(half):
+                self._window.popleft()
+            self._since_ns = self._window[0][0]
+            return self._zero
+        self._handled = True
+        number, angle = self._nearest(R)
+        if angle < self.criteria.min_separation_rad:
+            self.on_event(ManualEvent("too_close", number, angle, None))
+            return self._zero
+        keep = self.samples_per_pose or (3 * len(self._window)) // 4
+        stamps = np.array([t for t, _ in self._window], dtype=np.int64)[-keep:]
+        record = PoseRecord(str(len(self.records) + 1), R, p, wrench[-keep:], stamps)
+        self.records.append(record)
+        self.on_event(ManualEvent("recorded", len(self.records), angle, record))
+        return None if len(self.records) >= self.n_poses else self._zero

@@ -1,0 +1,89 @@
+"""``--robot``, ``--sensor`` and ``--mount``: the options every command on hardware shares.
+
+A robot and a sensor are opened by URI (:mod:`ftcomp.hardware.registry`); the mount is the
+sensor frame on the TCP, given at the edge in millimetres and degrees
+(``--mount X,Y,Z,ROLL,PITCH,YAW``, URDF-style fixed-axis roll, pitch, yaw). Without
+``--robot``, commands that allow it run the sensor alone on ``fixed://`` (the host's clock,
+no pose).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack, contextmanager
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
+
+__all__ = ["add_hardware_arguments", "open_hardware", "parse_mount"]
+
+#: The robot used when a command runs a sensor alone.
+NO_ROBOT = "fixed://"
+
+
+def parse_mount(text: str) -> tuple[float, ...]:
+    """``"0,0,35,0,0,90"`` -> six numbers: x, y, z [mm], roll, pitch, yaw [deg]."""
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 6 or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(
+            "expected X,Y,Z,ROLL,PITCH,YAW (mm, deg), six numbers, e.g. 0,0,35,0,0,90; "
+            f"got {text!r}"
+        )
+    return values
+
+
+def add_hardware_arguments(parser: argparse.ArgumentParser, *, robot_required: bool) -> None:
+    """Add ``--robot``, ``--sensor`` and ``--mount``."""
+    parser.add_argument(
+        "--robot",
+        required=robot_required,
+        metavar="URI",
+        help="the arm: sim://?..., ur://HOST, fixed://?rpy_deg=..., replay://FILE"
+        + ("" if robot_required else " (default: none, the sensor alone)"),
+    )
+    parser.add_argument(
+        "--sensor",
+        required=True,
+        metavar="URI",
+        help="the F/T sensor: sim://, netft://HOST, ur://HOST (built-in), replay://FILE",
+    )
+    parser.add_argument(
+        "--mount",
+        type=parse_mount,
+        default=None,
+        metavar="X,Y,Z,ROLL,PITCH,YAW",
+        help="the sensor frame in the robot's TCP frame [mm, deg] (default: the TCP frame)",
+    )
+
+
+def mount_of(args: argparse.Namespace) -> Mount:
+    """The :class:`~ftcomp.hardware.protocols.Mount` the options give."""
+    from ftcomp.hardware.protocols import Mount
+
+    if args.mount is None:
+        return Mount()
+    x, y, z, roll, pitch, yaw = args.mount
+    return Mount.from_xyz_rpy((x * 1e-3, y * 1e-3, z * 1e-3), (roll, pitch, yaw))
+
+
+@contextmanager
+def open_hardware(
+    args: argparse.Namespace, check_robot: Callable[[Robot], None] | None = None
+) -> Iterator[tuple[Robot, WrenchSensor, Mount]]:
+    """Open and enter the robot (then ``check_robot(robot)``), then the sensor; leave both
+    (motion stopped first) at the end."""
+    from ftcomp.hardware.registry import open_robot, open_sensor
+
+    mount = mount_of(args)
+    with ExitStack() as stack:
+        robot = stack.enter_context(open_robot(args.robot or NO_ROBOT))
+        if check_robot is not None:
+            check_robot(robot)
+        sensor = stack.enter_context(open_sensor(args.sensor, robot))
+        yield robot, sensor, mount

@@ -1,0 +1,227 @@
+"""``ftcomp run``: the live compliant loop on a robot, with the identified calibration.
+
+``ftcomp run --robot URI --sensor URI -c calibration.json --control admittance [--law ...]
+[--axes z --frame base] [--dry-run] -o run.csv``
+
+Each cycle: read, compensate (bias and tool gravity of the calibration), the admittance law on
+the selected axes (the paper's combined law ΔV = S (K1 dΔF/dt + K2 ΔF), its position or
+velocity form, or mass-damper-spring), the safety envelope (speed, acceleration, travel, force
+and torque limits, a sample watchdog), then the twist to the robot. ``--dry-run`` computes and
+logs every command and sends none. The run ends after ``--seconds``, or once the selected force
+error has stayed within ``--settle-band-N`` (e.g. a load set down), with exit 0. A protective
+stop, a sensor fault, a lost connection or a loop that keeps missing its period stops the robot
+at once and exits 1 with the reason; Ctrl-C stops the robot first and exits 130.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import sys
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
+from ftcomp.errors import FtcompError, ParameterError
+
+if TYPE_CHECKING:
+    from ftcomp.control.controller import AdmittanceController
+    from ftcomp.control.laws import AdmittanceLaw
+
+__all__ = ["register", "run"]
+
+_LAWS = ("combined", "position", "velocity", "mass-damper-spring")
+
+
+def register(parser: argparse.ArgumentParser) -> None:
+    """Add the ``run`` command's arguments to its parser."""
+    parser.description = __doc__.split("\n\n", 1)[1].replace("``", "") if __doc__ else None
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    add_hardware_arguments(parser, robot_required=True)
+    p = parser.add_argument
+    p(
+        "-c",
+        "--calibration",
+        required=True,
+        metavar="CALIBRATION.json",
+        help="from ftcomp calibrate",
+    )
+    p("--control", choices=("admittance",), required=True, help="the controller")
+    p("--law", choices=_LAWS, default="combined", help="admittance law (default combined)")
+    p("--axes", default="z", help="axes that yield to force, e.g. z or x,y,z,rz (default z)")
+    p("--frame", choices=("base", "sensor"), default="base", help="axes of --axes (base)")
+    p("--k1", type=float, default=0.1, metavar="MM_PER_N", help="K1 on x, y, z [mm/N] (0.1)")
+    p("--k2", type=float, default=1.0, metavar="MM_PER_S_N", help="K2 on x, y, z [mm/(s*N)] (1)")
+    p("--k1-rot", type=float, default=0.0, metavar="DEG_PER_NM", help="K1, rotations (default 0)")
+    p("--k2-rot", type=float, default=0.0, metavar="DEG_PER_S_NM", help="K2, rotations (default 0)")
+    p("--mass-kg", type=float, default=2.0, help="mass-damper-spring M [kg, kg*m^2] (2)")
+    p("--damping", type=float, default=200.0, metavar="N_S_PER_M", help="its D (200)")
+    p("--stiffness", type=float, default=0.0, metavar="N_PER_M", help="its K (default 0: free)")
+    p(
+        "--wrench-desired",
+        type=lambda s: [float(v) for v in s.split(",")],
+        default=[0.0] * 6,
+        metavar="FX,FY,FZ,TX,TY,TZ",
+        help="desired contact wrench in the control frame [N, N*m] (default zeros)",
+    )
+    p("--filter-hz", type=float, default=20.0, help="low-pass on the contact wrench [Hz] (20)")
+    p("--max-speed-mm-s", type=float, default=20.0, help="speed limit [mm/s] (20)")
+    p("--max-accel-mm-s2", type=float, default=500.0, help="acceleration limit [mm/s^2] (500)")
+    p("--max-travel-mm", type=float, default=20.0, help="largest travel per axis [mm] (20)")
+    p("--max-rotation-deg", type=float, default=5.0, help="largest rotation per axis [deg] (5)")
+    p("--max-force-N", type=float, default=40.0, help="protective stop above [N] (40)")
+    p("--max-torque-Nm", type=float, default=8.0, help="protective stop above [N*m] (8)")
+    p("--stale-ms", type=float, default=20.0, help="a reading older than this stops [ms] (20)")
+    p("--max-late-cycles", type=int, default=10, help="missed periods in a row that stop (10)")
+    p("--seconds", type=float, default=30.0, help="longest run [s] (30)")
+    p(
+        "--settle-band-N",
+        type=float,
+        help="end once the selected force error stays this small [N] (default: run --seconds)",
+    )
+    p("--settle-s", type=float, default=0.3, help="... for this long [s] (0.3)")
+    p("--dry-run", action="store_true", help="compute and log commands, send none")
+    p("-o", "--output", required=True, metavar="RUN.csv", help="the log, one row per cycle")
+    p("--force", action="store_true", help="replace an existing output file")
+    parser.set_defaults(handler=run)
+
+
+def _check(args: argparse.Namespace) -> None:
+    if len(args.wrench_desired) != 6 or not all(map(math.isfinite, args.wrench_desired)):
+        raise ParameterError("--wrench-desired needs six finite numbers FX,FY,FZ,TX,TY,TZ")
+    for name in ("k1", "k2", "k1_rot", "k2_rot", "damping", "stiffness"):
+        value = getattr(args, name)
+        if not (math.isfinite(value) and value >= 0.0):
+            raise ParameterError(f"--{name.replace('_', '-')} must be >= 0, got {value:g}")
+    for name in (
+        "mass_kg",
+        "filter_hz",
+        "max_speed_mm_s",
+        "max_accel_mm_s2",
+        "max_travel_mm",
+        "max_rotation_deg",
+        "max_force_N",
+        "max_torque_Nm",
+        "stale_ms",
+        "seconds",
+        "settle_s",
+    ):
+        value = getattr(args, name)
+        if not (math.isfinite(value) and value > 0.0):
+            raise ParameterError(f"--{name.replace('_', '-')} must be > 0, got {value:g}")
+    if args.max_late_cycles < 1:
+        raise ParameterError(f"--max-late-cycles must be >= 1, got {args.max_late_cycles}")
+
+
+def _controller(args: argparse.Namespace, period_s: float) -> AdmittanceController:
+    from ftcomp.control.controller import AdmittanceController
+    from ftcomp.control.filters import LowPassFilter
+    from ftcomp.control.laws import CombinedLaw, PositionLaw, VelocityLaw, selection_matrix
+    from ftcomp.control.mass_damper_spring import MassDamperSpringLaw
+    from ftcomp.control.safety import SafetyLimits
+
+    S = selection_matrix(args.axes)
+    k1 = np.array([args.k1 * 1e-3] * 3 + [math.radians(args.k1_rot)] * 3)
+    k2 = np.array([args.k2 * 1e-3] * 3 + [math.radians(args.k2_rot)] * 3)
+    law: AdmittanceLaw
+    if args.law == "combined":
+        law = CombinedLaw(k1, k2, S)
+    elif args.law == "position":
+        law = PositionLaw(k1, S)
+    elif args.law == "velocity":
+        law = VelocityLaw(k2, S)
+    else:
+        law = MassDamperSpringLaw(args.mass_kg, args.damping, args.stiffness, S)
+    travel, rotation = args.max_travel_mm * 1e-3, math.radians(args.max_rotation_deg)
+    limits = SafetyLimits(
+        max_twist=np.array([args.max_speed_mm_s * 1e-3] * 3 + [0.5] * 3),
+        max_twist_rate=np.array([args.max_accel_mm_s2 * 1e-3] * 3 + [5.0] * 3),
+        max_travel=np.array([travel] * 3 + [rotation] * 3),
+        max_force_N=args.max_force_N,
+        max_torque_Nm=args.max_torque_Nm,
+        stale_after_s=args.stale_ms * 1e-3,
+        max_repeated_samples=2,
+    )
+    return AdmittanceController(
+        law=law,
+        wrench_filter=LowPassFilter(args.filter_hz, period_s),
+        limits=limits,
+        frame=args.frame,
+        wrench_desired=np.array(args.wrench_desired),
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Open, run the loop, report."""
+    from ftcomp.compensation.compensator import GravityCompensator
+    from ftcomp.control.loop import ControlCycle, run_loop
+    from ftcomp.experiments.live import RUN_COLUMNS, CompliantStep, SettleRule
+    from ftcomp.io.atomic import atomic_output, check_writable
+    from ftcomp.io.calibration_json import load_calibration
+
+    _check(args)
+    output = check_writable(args.output, overwrite=args.force, inputs=[args.calibration])
+    calibration = load_calibration(args.calibration)
+    settle = SettleRule(args.settle_band_N, args.settle_s) if args.settle_band_N else None
+    fault, code = "", 0
+    with open_hardware(args) as (robot, sensor, mount):
+        take_control = getattr(robot, "connect_control", None)
+        if take_control is not None and not args.dry_run:
+            take_control()  # before the loop: it takes a while (a UR uploads its script)
+        controller = _controller(args, robot.control_period_s)
+        cycle = ControlCycle(
+            robot, sensor, mount=mount, compensator=GravityCompensator(calibration)
+        )
+        with atomic_output(output) as tmp, tmp.open("w", encoding="utf-8", newline="") as handle:
+            writer = csv.writer(handle, lineterminator="\n")
+            writer.writerow(RUN_COLUMNS)
+            rows: list[list[float]] = []
+
+            def write_row(row: object) -> None:
+                values = list(row)  # type: ignore[call-overload]
+                rows.append(values)
+                writer.writerow([f"{v:.9g}" for v in values])
+
+            step = CompliantStep(
+                controller,
+                robot,
+                cycle.read(),
+                args.seconds,
+                write_row,
+                settle=settle,
+                dry_run=args.dry_run,
+                max_late_cycles=args.max_late_cycles,
+            )
+            print(
+                f"{'dry run' if args.dry_run else 'running'}: {args.law} admittance on "
+                f"{args.axes} ({args.frame} frame), calibration {args.calibration}",
+                flush=True,
+            )
+            try:
+                run_loop(cycle, step)
+            except KeyboardInterrupt:
+                fault, code = "interrupted (Ctrl-C); the robot was stopped", 130
+            except FtcompError as exc:
+                fault, code = f"{exc}; the robot was stopped", 1
+    if not fault and step.faulted:
+        fault, code = f"protective stop: {step.outcome}; the robot was stopped", 1
+    data = np.array(rows).reshape(-1, len(RUN_COLUMNS))
+    col = {name: i for i, name in enumerate(RUN_COLUMNS)}
+    summary = f"{step.cycles} cycles in {data[-1, 0] if len(data) else 0.0:.2f} s, log {output}"
+    if len(data):
+        p = data[:, [col["px"], col["py"], col["pz"]]]
+        travel_mm = (p[-1] - p[0]) * 1e3
+        last = data[data[:, 0] >= data[-1, 0] - args.settle_s]
+        error = np.nanmean(last[:, [col["ex"], col["ey"], col["ez"]]], axis=0)
+        summary += (
+            f"; travel [{travel_mm[0]:+.2f} {travel_mm[1]:+.2f} {travel_mm[2]:+.2f}] mm, "
+            f"mean force error over the last {args.settle_s:g} s "
+            f"[{error[0]:+.3f} {error[1]:+.3f} {error[2]:+.3f}] N ({args.frame} frame)"
+        )
+    if fault:
+        print(f"error: {fault}; {summary}", file=sys.stderr)
+        return code
+    print(f"{step.outcome}: {summary}")
+    return 0

@@ -1,0 +1,125 @@
+"""``ftcomp stream``: log a sensor's readings at its own rate, raw and compensated.
+
+``ftcomp stream --sensor URI [--robot URI] [-c calibration.json] --seconds S -o log.csv``
+
+Every reading is one row (``t`` on the session's clock, ``fx..tz`` raw, sensor frame); with a
+robot the sensor's pose (``qx..qw``, ``px..pz``), and with a calibration the contact wrench
+(``cfx..ctz``). Compensation needs the pose: give ``--robot`` (an arm, or ``fixed://?rpy_deg=..``
+for a sensor held still). A terminal shows a live line: rate, lost packets, contact force.
+A fault or Ctrl-C keeps what was logged and exits non-zero (1, or 130).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import sys
+
+from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
+from ftcomp.errors import FtcompError, ParameterError
+
+__all__ = ["register", "run"]
+
+
+def register(parser: argparse.ArgumentParser) -> None:
+    """Add the ``stream`` command's arguments to its parser."""
+    parser.description = __doc__.split("\n\n", 1)[1].replace("``", "") if __doc__ else None
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    add_hardware_arguments(parser, robot_required=False)
+    parser.add_argument(
+        "-c",
+        "--calibration",
+        metavar="CALIBRATION.json",
+        help="also log the contact wrench (default: the raw readings only)",
+    )
+    parser.add_argument("--seconds", type=float, required=True, help="how long to log [s]")
+    parser.add_argument(
+        "-o", "--output", required=True, metavar="LOG.csv", help="the log, one row per reading"
+    )
+    parser.add_argument("--force", action="store_true", help="replace an existing output file")
+    parser.set_defaults(handler=run)
+
+
+def _health_text(sensor: object) -> str:
+    health = getattr(sensor, "stream_health", None)
+    if health is None:
+        return ""
+    h = health()
+    return (
+        f"; lost {h['lost_packets']} packets of {h['received'] + h['lost_packets']} "
+        f"(last RDT sequence {h['last_rdt_sequence']})"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Open, log until the time is up (or a fault), report."""
+    from ftcomp.cli.live_status import StatusLine
+    from ftcomp.compensation.compensator import GravityCompensator
+    from ftcomp.control.loop import ControlCycle, run_loop
+    from ftcomp.experiments.live import StreamLogger, stream_columns
+    from ftcomp.hardware.pacing import CountsLostPackets
+    from ftcomp.hardware.replay import EndOfReplayError
+    from ftcomp.io.atomic import atomic_output, check_writable
+    from ftcomp.io.calibration_json import load_calibration
+
+    if not (math.isfinite(args.seconds) and args.seconds > 0.0):
+        raise ParameterError(f"--seconds must be > 0, got {args.seconds:g}")
+    inputs = [args.calibration] if args.calibration else []
+    output = check_writable(args.output, overwrite=args.force, inputs=inputs)
+    model = load_calibration(args.calibration).model if args.calibration else None
+    if model is not None and args.robot is None:
+        raise ParameterError(
+            "compensation (-c) needs the sensor's pose: give --robot (ur://HOST, "
+            "fixed://?rpy_deg=R,P,Y for a sensor held still, ...)"
+        )
+    fault, code = "", 0
+
+    def check_pose(robot: object) -> None:
+        if model is not None and not getattr(robot, "pose_known", True):
+            raise ParameterError(
+                f"{args.robot}: gives no pose to compensate with: add ?rpy_deg=R,P,Y (and xyz_mm)"
+            )
+
+    with open_hardware(args, check_pose) as (robot, sensor, mount):
+        with_pose = args.robot is not None and getattr(robot, "pose_known", True)
+        compensator = GravityCompensator(model) if model is not None else None
+        with atomic_output(output) as tmp, tmp.open("w", encoding="utf-8", newline="") as handle:
+            writer = csv.writer(handle, lineterminator="\n")
+            writer.writerow(stream_columns(with_pose=with_pose, compensated=model is not None))
+
+            def write_row(row: object) -> None:
+                writer.writerow([f"{v:.10g}" for v in row])  # type: ignore[attr-defined]
+
+            logger = StreamLogger(
+                sensor, write_row, args.seconds, with_pose=with_pose, compensator=compensator
+            )
+            lost = sensor.lost_packets if isinstance(sensor, CountsLostPackets) else None
+            status = StatusLine(
+                lambda: logger.count,
+                (lambda: sensor.lost_packets) if lost is not None else None,  # type: ignore[attr-defined]
+                lambda: logger.contact_force_N,
+                lambda: logger.elapsed_s,
+                args.seconds,
+            )
+            cycle = ControlCycle(robot, sensor, mount=mount, compensator=compensator)
+            try:
+                run_loop(cycle, logger, sinks=[status])
+            except EndOfReplayError:
+                pass  # the recording ended: a normal end
+            except KeyboardInterrupt:
+                fault, code = "interrupted (Ctrl-C)", 130
+            except FtcompError as exc:
+                fault, code = str(exc), 1
+            finally:
+                status.close()
+        health = _health_text(sensor)
+    rate = logger.count / logger.elapsed_s if logger.elapsed_s > 0 else math.nan
+    summary = (
+        f"{logger.count} readings in {logger.elapsed_s:.2f} s ({rate:.0f} Hz) to {output}{health}"
+    )
+    if fault:
+        print(f"error: {fault}; logged {summary}", file=sys.stderr)
+        return code
+    print(f"logged {summary}")
+    return 0

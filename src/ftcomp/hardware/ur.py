@@ -1,0 +1,370 @@
+"""The ``ur://`` backend: a Universal Robots arm (and its built-in F/T sensor) through ``ur_rtde``.
+
+URI::
+
+    ur://HOST                     the controller (RTDE on port 30004)
+        ?frequency_hz=500         RTDE and control rate (default: 500 on e-Series, 125 on CB3)
+        &max_speed_mm_s=100       speed limit of blocking moves (moveL) [mm/s]
+        &max_accel_mm_s2=500      their acceleration [mm/s^2], and speedL's
+        &command=speedl|servol    how a twist is sent: speedL, or servoL to the integrated pose
+        &timeout_s=0.5            the controller's data older than this is a lost connection [s]
+        &connect_timeout_s=2      longest wait for the controller to answer [s]
+
+    --sensor ur://HOST?wrench=raw|tcp&sign=1|-1     the built-in sensor (:mod:`.ur_sensor`)
+
+Frames and units, converted once here: the controller reports the TCP pose as ``[x, y, z, rx,
+ry, rz]`` in the base frame (metres, rotation vector): ``p_base_tcp`` and
+``R_base_tcp = Rotation.from_rotvec(r)``. Twists are sent as base-frame TCP twists, as speedL
+takes them. The built-in sensor gives ``wrench=raw`` (default): ``ft_raw_wrench`` (PolyScope 5.9
+or later), the raw, payload-uncompensated reading in the tool flange frame: with a TCP offset
+configured on the controller, give ``--mount`` the flange frame seen from the TCP.
+``wrench=tcp``: ``actual_TCP_force``, compensated for the controller's payload setting and
+expressed in the *base* frame at the TCP; it is rotated here into the TCP frame
+(``R_base_tcp.T``), so the sensor frame is the TCP frame (identity mount). ``sign=-1`` flips
+the reading, for a controller whose convention is the force on the tool rather than by it:
+check with a hanging tool that ``fz`` is +weight when the flange points down.
+
+Time: every stamp is the host's :func:`time.monotonic_ns` when the value was read (the
+controller's own ``timestamp`` only detects a stalled stream). The control interface (which
+uploads a URScript program that takes over the arm) is opened only for the first motion
+command, so recording by hand (free-drive) and streaming never move the robot.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from types import TracebackType
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
+from ftcomp.hardware.pacing import Pacer
+from ftcomp.hardware.protocols import PoseSample, Robot
+from ftcomp.hardware.registry import Uri
+from ftcomp.hardware.rtde_probe import probe_rtde
+
+__all__ = ["RECEIVE_VARIABLES", "URRobot", "open_robot"]
+
+#: RTDE outputs the backend reads (``ft_raw_wrench`` is added on PolyScope 5.9 or later).
+RECEIVE_VARIABLES = (
+    "timestamp",
+    "actual_TCP_pose",
+    "actual_q",
+    "actual_qd",
+    "actual_TCP_force",
+    "robot_mode",
+    "safety_mode",
+    "safety_status_bits",
+)
+#: Joint speed below which the arm counts as at rest [rad/s], and for how long [s].
+_STILL_QD_RAD_S = 2e-3
+_STILL_FOR_S = 0.1
+#: moveL turns the tool at this many rad/s per m/s of its speed parameter (UR's trajectory
+#: generator: angular speed = 4 x linear speed, in rad/s).
+_MOVEL_RAD_PER_M = 4.0
+
+
+def _pose_list(p: NDArray[np.float64], R: NDArray[np.float64]) -> list[float]:
+    return [*map(float, p), *map(float, Rotation.from_matrix(R).as_rotvec())]
+
+
+class URRobot:
+    """A UR arm over RTDE (see the module docstring for the URI and the frames).
+
+    Args:
+        uri: the parsed URI (for messages).
+        frequency_hz: RTDE rate and control rate [Hz]; None: by controller generation.
+        max_speed_m_s: speed limit of blocking moves [m/s].
+        max_accel_m_s2: their acceleration, and speedL's [m/s^2].
+        command: ``"speedl"`` or ``"servol"``.
+        timeout_s: controller data older than this is a lost connection [s].
+        connect_timeout_s: the connection check's time limit [s].
+    """
+
+    clock_name = "monotonic"
+
+    def __init__(
+        self,
+        uri: Uri,
+        *,
+        frequency_hz: float | None,
+        max_speed_m_s: float,
+        max_accel_m_s2: float,
+        command: str,
+        timeout_s: float,
+        connect_timeout_s: float,
+    ) -> None:
+        self.uri = uri
+        self.host = uri.host
+        self.max_speed_m_s = max_speed_m_s
+        self.max_accel_m_s2 = max_accel_m_s2
+        self.command = command
+        self.timeout_s = timeout_s
+        self.connect_timeout_s = connect_timeout_s
+        self._frequency_hz = frequency_hz
+        self.version: tuple[int, int, int, int] = (0, 0, 0, 0)
+        self.variables: tuple[str, ...] = RECEIVE_VARIABLES
+        self.receive: Any = None
+        self.control: Any = None
+        self.pacer = Pacer(1.0 / frequency_hz if frequency_hz else 0.002)
+        self._freshest_offset_s = -math.inf
+        self._servo_target: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
+        self._moving = False
+
+    # ----------------------------------------------------------------- lifecycle
+    @property
+    def control_period_s(self) -> float:
+        """The control period [s] (1 / the RTDE frequency)."""
+        return self.pacer.period_s
+
+    @property
+    def late_in_a_row(self) -> int:
+        """Control periods missed in a row up to now (see :class:`.pacing.Pacer`)."""
+        return self.pacer.late_in_a_row
+
+    def __enter__(self) -> URRobot:
+        """Check the controller answers, then connect ``ur_rtde``'s receive interface."""
+        try:
+            import rtde_receive
+        except ImportError:
+            raise ParameterError("ur:// needs ur_rtde: pip install 'ftcomp[ur]'") from None
+        probe = ("timestamp", "actual_TCP_pose")
+        self.version = probe_rtde(
+            self.host, probe, timeout_s=self.connect_timeout_s, label=repr(self.uri.text)
+        )
+        major, minor = self.version[0], self.version[1]
+        frequency = self._frequency_hz or (500.0 if major > 3 else 125.0)
+        self.pacer = Pacer(1.0 / frequency)
+        raw = major > 5 or (major == 5 and minor >= 9)
+        self.variables = RECEIVE_VARIABLES + (("ft_raw_wrench",) if raw else ())
+        try:
+            self.receive = rtde_receive.RTDEReceiveInterface(
+                self.host, frequency, list(self.variables)
+            )
+        except RuntimeError as exc:
+            raise HardwareError(f"{self.uri.text!r}: ur_rtde could not connect: {exc}") from None
+        self._freshest_offset_s = self.receive.getTimestamp() - time.monotonic()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Stop motion, end the control script, disconnect."""
+        try:
+            self.stop()
+        finally:
+            if self.control is not None:
+                control, self.control = self.control, None
+                control.stopScript()
+                control.disconnect()
+            if self.receive is not None:
+                receive, self.receive = self.receive, None
+                receive.disconnect()
+
+    def connect_control(self) -> None:
+        """Take control of the arm now (uploads ur_rtde's URScript, about a second), rather than
+        in the first cycle that moves it."""
+        self._control()
+
+    def _control(self) -> Any:
+        """The control interface, connected on first use (uploads ur_rtde's URScript)."""
+        if self.control is None:
+            import rtde_control
+
+            self.check()
+            try:
+                self.control = rtde_control.RTDEControlInterface(
+                    self.host, 1.0 / self.control_period_s
+                )
+            except RuntimeError as exc:
+                raise HardwareError(
+                    f"{self.uri.text!r}: cannot take control of the arm (remote control mode "
+                    f"on, program stopped?): {exc}"
+                ) from None
+        return self.control
+
+    # ----------------------------------------------------------------- state
+    def now_ns(self) -> int:
+        """The host's monotonic clock [ns]."""
+        return time.monotonic_ns()
+
+    def check(self) -> None:
+        """Raise if the connection is lost, the data stalled, or the arm is stopped by safety.
+
+        Raises:
+            HardwareError: naming what happened.
+        """
+        r = self.receive
+        if r is None or not r.isConnected():
+            raise HardwareError(f"{self.uri.text!r}: lost the connection to the controller")
+        # The controller's clock minus the host's, at the freshest data seen, and now: the
+        # difference is how far the newest data lags behind (the clocks run at the same rate).
+        offset = r.getTimestamp() - time.monotonic()
+        self._freshest_offset_s = max(self._freshest_offset_s, offset)
+        lag = self._freshest_offset_s - offset
+        if lag > self.timeout_s:
+            raise HardwareError(
+                f"{self.uri.text!r}: no new data from the controller for {lag:.2f} s"
+            )
+        if r.isProtectiveStopped() or r.isEmergencyStopped():
+            kind = "protective" if r.isProtectiveStopped() else "emergency"
+            raise HardwareError(f"{self.uri.text!r}: the arm is in a {kind} stop")
+
+    def pose(self) -> PoseSample:
+        """The TCP pose in the base frame, stamped on the host's clock when read."""
+        self.check()
+        x = self.receive.getActualTCPPose()
+        R = Rotation.from_rotvec(x[3:6]).as_matrix()
+        return PoseSample(time.monotonic_ns(), np.array(x[0:3], dtype=float), R)
+
+    def joint_speed_rad_s(self) -> float:
+        """The fastest joint's speed now [rad/s]."""
+        self.check()
+        return float(np.max(np.abs(self.receive.getActualQd())))
+
+    # ----------------------------------------------------------------- motion
+    def is_reachable(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
+    ) -> bool:
+        """Inverse kinematics has a solution and the pose is within the safety limits."""
+        control = self._control()
+        pose = _pose_list(p_base_tcp, R_base_tcp)
+        return bool(
+            control.getInverseKinematicsHasSolution(pose) and control.isPoseWithinSafetyLimits(pose)
+        )
+
+    def move_pose(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64], duration_s: float
+    ) -> None:
+        """Blocking linear move (moveL) at a speed that takes about ``duration_s``, capped at the
+        URI's speed limit.
+
+        Raises:
+            UnreachablePoseError: no inverse kinematics or outside the safety limits (checked
+                before moving).
+            HardwareError: the move failed or the connection was lost.
+        """
+        p = np.asarray(p_base_tcp, dtype=float)
+        R = np.asarray(R_base_tcp, dtype=float)
+        if not self.is_reachable(p, R):
+            raise UnreachablePoseError(
+                f"{self.uri.text!r}: pose p={np.round(p, 4).tolist()} m is not reachable "
+                "(no inverse kinematics or outside the safety limits); not moved"
+            )
+        here = self.pose()
+        distance = float(np.linalg.norm(p - here.p_base_tcp))
+        angle = float(Rotation.from_matrix(R @ here.R_base_tcp.T).magnitude())
+        # moveL's profile takes the longer of the linear move at v and the rotation at 4 v rad/s.
+        wanted = max(distance, angle / _MOVEL_RAD_PER_M) / max(duration_s, 1e-3)
+        speed = min(self.max_speed_m_s, max(wanted, 1e-3))
+        self._moving = True
+        ok = self._control().moveL(_pose_list(p, R), speed, self.max_accel_m_s2, False)
+        self._moving = False
+        self.check()
+        if not ok:
+            raise HardwareError(f"{self.uri.text!r}: moveL did not complete")
+
+    def settle(self, max_duration_s: float) -> float:
+        """Wait until every joint is slower than 2 mrad/s for 0.1 s; return the time taken [s].
+
+        Raises:
+            HardwareError: still moving after ``max_duration_s``.
+        """
+        t0 = time.monotonic()
+        still_since: float | None = None
+        while True:
+            now = time.monotonic()
+            if self.joint_speed_rad_s() < _STILL_QD_RAD_S:
+                still_since = now if still_since is None else still_since
+                if now - still_since >= _STILL_FOR_S:
+                    return now - t0
+            else:
+                still_since = None
+            if now - t0 > max_duration_s:
+                raise HardwareError(
+                    f"{self.uri.text!r}: the arm did not come to rest within {max_duration_s:g} s"
+                )
+            self.pacer.wait()
+
+    def command_twist(self, twist_base: NDArray[np.float64]) -> None:
+        """Send the TCP twist (base frame) by speedL, or by servoL to the integrated pose.
+
+        A zero twist while nothing moves is not sent: it needs no control interface.
+        """
+        tw = np.asarray(twist_base, dtype=float)
+        if tw.shape != (6,) or not np.all(np.isfinite(tw)):
+            raise ParameterError(f"twist_base must be 6 finite numbers, got {twist_base!r}")
+        if not np.any(tw) and not self._moving:
+            return
+        control = self._control()
+        self._moving = True
+        dt = self.control_period_s
+        if self.command == "speedl":
+            control.speedL(tw.tolist(), self.max_accel_m_s2, 0.0)
+            return
+        if self._servo_target is None:
+            here = self.pose()
+            self._servo_target = (here.p_base_tcp.copy(), here.R_base_tcp.copy())
+        p, R = self._servo_target
+        p = p + tw[:3] * dt
+        R = Rotation.from_rotvec(tw[3:] * dt).as_matrix() @ R
+        self._servo_target = (p, R)
+        control.servoL(_pose_list(p, R), 0.0, 0.0, dt, 0.1, 300.0)
+
+    def wait_cycle(self) -> None:
+        """Wait for the next control period (host clock)."""
+        self.pacer.wait()
+
+    def stop(self) -> None:
+        """Decelerate to rest at once (speedStop, or servoStop in servo mode)."""
+        self._servo_target = None
+        if self.control is None or not self._moving:
+            return
+        self._moving = False
+        if self.command == "speedl":
+            self.control.speedStop(10.0)
+        else:
+            self.control.servoStop(10.0)
+
+
+def _option_positive(uri: Uri, name: str, value: float | None) -> float:
+    assert value is not None
+    if not (math.isfinite(value) and value > 0.0):
+        raise ParameterError(f"{uri.text!r}: {name} must be > 0, got {value:g}")
+    return value
+
+
+def open_robot(uri: Uri) -> Robot:
+    """A UR arm from its URI (connects when entered)."""
+    if not uri.host:
+        raise ParameterError(f"{uri.text!r}: give the controller's address, e.g. ur://192.168.1.10")
+    if uri.port is not None or uri.path not in ("", "/"):
+        raise ParameterError(f"{uri.text!r}: ur:// takes a host only (RTDE is on port 30004)")
+    options = uri.reader()
+    frequency = options.number("frequency_hz", None)
+    speed = _option_positive(uri, "max_speed_mm_s", options.number("max_speed_mm_s", 100.0))
+    accel = _option_positive(uri, "max_accel_mm_s2", options.number("max_accel_mm_s2", 500.0))
+    command = options.text("command", "speedl", ("speedl", "servol"))
+    timeout_s = _option_positive(uri, "timeout_s", options.number("timeout_s", 0.5))
+    connect_s = _option_positive(uri, "connect_timeout_s", options.number("connect_timeout_s", 2.0))
+    options.done()
+    if frequency is not None and not 1.0 <= frequency <= 500.0:
+        raise ParameterError(f"{uri.text!r}: frequency_hz must be in [1, 500], got {frequency:g}")
+    if speed > 1000.0:
+        raise ParameterError(f"{uri.text!r}: max_speed_mm_s above 1000 mm/s is not allowed")
+    return URRobot(
+        uri,
+        frequency_hz=frequency,
+        max_speed_m_s=speed * 1e-3,
+        max_accel_m_s2=accel * 1e-3,
+        command=command,
+        timeout_s=timeout_s,
+        connect_timeout_s=connect_s,
+    )
