@@ -141,8 +141,7 @@ def _subparser(argv: list[str]) -> argparse.ArgumentParser:
 
 #: Commands other sessions are writing now whose help does not meet the rule yet: the test runs
 #: and reports them as expected failures until their owners fix them (then drop the entry).
-HELP_GAPS = {
-}
+HELP_GAPS: dict[str, str] = {}
 
 
 def _with_gaps(argv: list[str]) -> object:
