@@ -8,6 +8,7 @@ that moment (from a sample CSV, a recording or a bag). :class:`PoseList` holds t
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -35,7 +36,8 @@ class Samples:
         pose: pose id of each row as text, shape (N,), or None when the rows carry no pose id.
         t: time stamps [s], shape (N,), or None.
         header: the source file's column names, in order (empty when not from a file).
-        rows: every data row's cells as read, for writing them back out unchanged.
+        rows: every data row's cells as read, for writing them back out unchanged (a file
+            read by :func:`ftcomp.read_samples` gives a view that reads them on access).
         source: where the samples came from (a file path, "simulated cell"...), for messages.
         warnings: things that look wrong but were accepted (e.g. angles that look like radians).
     """
@@ -46,7 +48,7 @@ class Samples:
     pose: NDArray[np.str_] | None = field(default=None, repr=False)
     t: NDArray[np.float64] | None = field(default=None, repr=False)
     header: tuple[str, ...] = ()
-    rows: tuple[tuple[str, ...], ...] = field(default=(), repr=False)
+    rows: Sequence[tuple[str, ...]] = field(default=(), repr=False)
     source: str = "<memory>"
     warnings: tuple[str, ...] = ()
 

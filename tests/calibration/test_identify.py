@@ -209,3 +209,71 @@ def test_paper_poses_are_well_conditioned_and_report_leave_one_out() -> None:
     # Prediction on an unseen pose is somewhat worse than the in-sample fit, never better by far.
     assert result.residual_rms[0] < force_rms < 3 * result.residual_rms[0]
     assert result.residual_rms[1] < torque_rms < 3 * result.residual_rms[1]
+
+
+# --- Grouping with numpy, the vectorised distinct-pose check, recordings in motion (issue 11) ---
+
+
+def test_pose_groups_keep_the_order_of_first_appearance_with_interleaved_rows(rng) -> None:
+    from ftcomp.calibration.identify import pose_means
+
+    R3 = Rotation.random(3, rng=rng).as_matrix()
+    order = np.array([2, 0, 2, 1, 0, 2, 1, 1, 0, 2])
+    ids = np.array(["c", "a", "b"])[order]
+    wrench = rng.normal(size=(10, 6))
+    samples = Samples(wrench_sensor=wrench, R_base_sensor=R3[order], encoding="rotvec", pose=ids)
+    got_ids, R, mean, count, var = pose_means(samples)
+    assert got_ids == ("b", "c", "a")
+    for k, pose in enumerate((2, 0, 1)):
+        rows = wrench[order == pose]
+        np.testing.assert_allclose(R[k], R3[pose], atol=0)
+        np.testing.assert_allclose(mean[k], rows.mean(axis=0), rtol=1e-12)
+        np.testing.assert_allclose(var[k], rows.var(axis=0, ddof=1) / len(rows), rtol=1e-9)
+        assert count[k] == len(rows)
+
+
+def test_without_a_pose_column_repeated_orientations_are_one_pose_each(rng) -> None:
+    from ftcomp.calibration.identify import pose_means
+
+    R = np.repeat(Rotation.random(5, rng=rng).as_matrix(), 4, axis=0)[::-1]
+    samples = Samples(wrench_sensor=TRUE_MODEL.predict(R), R_base_sensor=R, encoding="rotvec")
+    ids, R_pose, _, count, _ = pose_means(samples)
+    assert ids == ("1", "2", "3", "4", "5") and list(count) == [4] * 5
+    np.testing.assert_array_equal(R_pose, R[::4])
+
+
+def test_a_recording_in_motion_without_pose_ids_points_to_still_segments(rng) -> None:
+    t = np.linspace(0.0, 2.0, 2000)
+    R = Rotation.from_rotvec(np.outer(t, [0.3, 0.5, 0.1])).as_matrix()
+    samples = Samples(
+        wrench_sensor=TRUE_MODEL.predict(R), R_base_sensor=R, encoding="rotvec", source="rec.csv"
+    )
+    with pytest.raises(
+        IdentificationError,
+        match=r"rec.csv: no 'pose' column, and the orientation changes from row to row "
+        r"\(2000 orientations in 2000 rows.*still-segment detection",
+    ):
+        calibrate(samples)
+
+
+def test_many_single_readings_at_distinct_poses_are_not_a_recording_in_motion(rng) -> None:
+    R = Rotation.random(300, rng=rng).as_matrix()
+    samples = Samples(wrench_sensor=TRUE_MODEL.predict(R), R_base_sensor=R, encoding="rotvec")
+    assert len(calibrate(samples, method="paper").pose_ids) == 300
+
+
+def test_near_duplicate_poses_count_once_in_the_distinct_pose_check(rng) -> None:
+    """2,000 poses within 1e-7 of two orientations: 2 distinct poses, found without comparing
+    every pair in Python."""
+    base = Rotation.random(2, rng=rng)
+    jitter = Rotation.from_rotvec(rng.normal(scale=2e-8, size=(2000, 3)))
+    R = (jitter * base[np.arange(2000) % 2]).as_matrix()
+    samples = Samples(
+        wrench_sensor=TRUE_MODEL.predict(R),
+        R_base_sensor=R,
+        encoding="rotvec",
+        pose=np.arange(2000).astype(str),
+        source="near.csv",
+    )
+    with pytest.raises(IdentificationError, match=r"near.csv: 2 distinct pose\(s\)"):
+        calibrate(samples)

@@ -17,14 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.arrays import freeze_field
-from ftcomp.calibration.methods import (
-    Fit,
-    Method,
-    fit_joint,
-    fit_paper,
-    force_regressor,
-    predict_wrench,
-)
+from ftcomp.calibration.loo import leave_one_out as _leave_one_out
+from ftcomp.calibration.methods import CONDITION_SINGULAR, Method, fit_method, force_regressor
 from ftcomp.errors import IdentificationError, ParameterError
 from ftcomp.frames import tilt_from_gravity_in_base
 from ftcomp.model import GravityModel
@@ -42,9 +36,12 @@ __all__ = [
 
 #: Condition number of the force regressor above which the poses are reported as too alike.
 CONDITION_WARNING = 30.0
-#: ... and above which bias and gravity are not separable at all.
-_CONDITION_SINGULAR = 1e7
 _DISTINCT_POSE_TOLERANCE = 1e-6  # Frobenius norm between rotation matrices
+_SAME_POSE_TOLERANCE = 1e-3  # ... within one pose id
+#: Without a pose column: readings at distinct orientations, most rows their own, a median step
+#: between consecutive rows below this (Frobenius; about 0.4 deg) make a recording in motion.
+_CONTINUOUS_STEP = 0.01
+_CONTINUOUS_MIN_ROWS = 20
 
 
 @dataclass(frozen=True)
@@ -113,13 +110,18 @@ class Calibration:
     def residual_rms(self) -> tuple[float, float]:
         """RMS of the force [N] and torque [N*m] residuals over poses and axes."""
         r = self.residuals
+        if not len(r):
+            return math.nan, math.nan
         return float(np.sqrt(np.mean(r[:, :3] ** 2))), float(np.sqrt(np.mean(r[:, 3:] ** 2)))
 
     @property
     def relative_error_mean_percent(self) -> NDArray[np.float64]:
         """Mean of the Table-3 relative errors per axis, shape (6,) (the paper's delta row)."""
-        with np.errstate(invalid="ignore"):
-            return np.asarray(np.nanmean(self.relative_error_percent, axis=0), dtype=float)
+        relative = self.relative_error_percent
+        seen = np.isfinite(relative).any(axis=0)  # an axis without any: NaN, and no warning
+        out = np.full(6, np.nan)
+        out[seen] = np.nanmean(relative[:, seen], axis=0)
+        return out
 
     @property
     def loo_rms(self) -> tuple[float, float]:
@@ -134,101 +136,116 @@ class Calibration:
             )
 
 
+def _groups(samples: Samples) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Each row's pose number (0, 1, ... in order of first appearance) and each pose's first
+    row: by ``pose`` id, or without one by orientation (rounded to 1e-9)."""
+    if samples.pose is not None:
+        _, first, inverse = np.unique(samples.pose, return_index=True, return_inverse=True)
+    else:
+        rounded = np.round(samples.R_base_sensor.reshape(len(samples), 9), 9) + 0.0  # no -0.0
+        _, first, inverse = np.unique(rounded, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return rank[inverse.reshape(-1)], first[order]
+
+
+def _check_not_continuous(samples: Samples, poses: int) -> None:
+    n = len(samples)
+    if samples.pose is not None or n < _CONTINUOUS_MIN_ROWS or poses < n // 2:
+        return
+    R = samples.R_base_sensor
+    step = float(np.median(np.linalg.norm(R[1:] - R[:-1], axis=(1, 2))))
+    if step < _CONTINUOUS_STEP:
+        step_deg = math.degrees(step / math.sqrt(2.0))  # |R1 - R2| = 2 sqrt(2) sin(angle / 2)
+        raise IdentificationError(
+            f"{samples.source}: no 'pose' column, and the orientation changes from row to row "
+            f"({poses} orientations in {n} rows, median step {step_deg:.2g} deg): a recording "
+            "in motion, not readings at still poses; cut it into still segments first "
+            "(still-segment detection: ftcomp import-bag for bags, "
+            "ftcomp.ros2.still.find_still_segments for any recording) with a pose id each, or "
+            "add a 'pose' column"
+        )
+
+
 def pose_means(
     samples: Samples,
 ) -> tuple[tuple[str, ...], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray]:
     """Group readings by pose and average them.
 
     Rows with the same ``pose`` id form a pose; without a ``pose`` column, rows with the same
-    orientation do. Returns ``(ids, R (P,3,3), wrench mean (P,6), counts (P,), variance of the
-    mean (P,6))``, the variance NaN at poses with a single reading.
+    orientation do (a file whose orientation changes continuously, a recording in motion, is an
+    error pointing to still-segment detection). Returns ``(ids, R (P,3,3), wrench mean (P,6),
+    counts (P,), variance of the mean (P,6))``, the variance NaN at poses with a single reading.
     """
+    group, first = _groups(samples)
+    _check_not_continuous(samples, len(first))
+    n_poses = len(first)
+    R_all, w = samples.R_base_sensor, samples.wrench_sensor
+    R = R_all[first]
+    spread = np.zeros(n_poses)
+    np.maximum.at(spread, group, np.linalg.norm(R_all - R[group], axis=(1, 2)))
+    bad = np.flatnonzero(spread > _SAME_POSE_TOLERANCE)
     if samples.pose is not None:
-        keys = list(samples.pose)
+        ids = tuple(str(samples.pose[i]) for i in first)
     else:
-        rounded = np.round(samples.R_base_sensor.reshape(len(samples), 9), 9)
-        keys = [str(tuple(row)) for row in rounded]
-    order: dict[str, list[int]] = {}
-    for i, key in enumerate(keys):
-        order.setdefault(key, []).append(i)
-    ids: list[str] = []
-    R, mean, count, var = [], [], [], []
-    for n_pose, (key, rows) in enumerate(order.items(), start=1):
-        Rs = samples.R_base_sensor[rows]
-        spread = float(np.max(np.linalg.norm(Rs - Rs[0], axis=(1, 2))))
-        if spread > 1e-3:
-            raise IdentificationError(
-                f"{samples.source}: pose {key!r} has readings at orientations that differ by "
-                f"{spread:.3g} (Frobenius norm): one pose id must be one orientation"
-            )
-        w = samples.wrench_sensor[rows]
-        ids.append(key if samples.pose is not None else str(n_pose))
-        R.append(Rs[0])
-        mean.append(w.mean(axis=0))
-        count.append(len(rows))
-        var.append(w.var(axis=0, ddof=1) / len(rows) if len(rows) > 1 else np.full(6, np.nan))
-    return tuple(ids), np.array(R), np.array(mean), np.array(count, dtype=float), np.array(var)
+        ids = tuple(str(k) for k in range(1, n_poses + 1))
+    if bad.size:
+        raise IdentificationError(
+            f"{samples.source}: pose {ids[bad[0]]!r} has readings at orientations that differ "
+            f"by {spread[bad[0]]:.3g} (Frobenius norm): one pose id must be one orientation"
+        )
+    count = np.bincount(group, minlength=n_poses).astype(float)
+    mean = (
+        np.column_stack([np.bincount(group, w[:, j], n_poses) for j in range(6)]) / count[:, None]
+    )
+    deviation = w - mean[group]
+    squares = np.column_stack([np.bincount(group, deviation[:, j] ** 2, n_poses) for j in range(6)])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        var = squares / ((count - 1.0) * count)[:, None]
+    var[count < 2] = np.nan
+    return ids, R, mean, count, var
+
+
+def _distinct_poses(R: NDArray[np.float64], enough: int) -> int:
+    """How many poses differ from every earlier one by more than the tolerance; stops counting
+    once there are ``enough`` (exact duplicates, the usual case, are set aside first)."""
+    flat = R.reshape(len(R), 9)
+    _, first = np.unique(np.round(flat, 9) + 0.0, axis=0, return_index=True)
+    candidates = flat[np.sort(first)]
+    squares = np.einsum("ij,ij->i", candidates, candidates)
+    distinct, block = 0, 512
+    for start in range(0, len(candidates), block):
+        stop = min(start + block, len(candidates))
+        # Squared distances of this block's poses to every earlier one (|a|^2 + |b|^2 - 2 a.b:
+        # rounding of 1e-15 against a tolerance of 1e-12).
+        d2 = (
+            squares[start:stop, None]
+            + squares[None, :stop]
+            - 2 * candidates[start:stop] @ candidates[:stop].T
+        )
+        d2[np.arange(stop - start)[:, None] + start <= np.arange(stop)[None, :]] = np.inf
+        distinct += int(np.count_nonzero(d2.min(axis=1) > _DISTINCT_POSE_TOLERANCE**2))
+        if distinct >= enough:
+            break
+    return distinct
 
 
 def _check_identifiable(R: NDArray[np.float64], source: str) -> float:
-    n = len(R)
-    distinct = 0
-    for i in range(n):
-        if all(np.linalg.norm(R[i] - R[j]) > _DISTINCT_POSE_TOLERANCE for j in range(i)):
-            distinct += 1
+    distinct = _distinct_poses(R, enough=3)
     if distinct < 3:
         raise IdentificationError(
             f"{source}: {distinct} distinct pose(s); at least 3 are needed to separate sensor "
             "bias from tool gravity"
         )
     cond = float(np.linalg.cond(force_regressor(R)))
-    if not math.isfinite(cond) or cond > _CONDITION_SINGULAR:
+    if not math.isfinite(cond) or cond > CONDITION_SINGULAR:
         raise IdentificationError(
             f"{source}: the poses differ only by rotation about one axis (e.g. about the gravity "
             f"direction; regressor condition number {cond:.3g}): bias and gravity cannot be "
             "separated; add poses that tilt the tool differently"
         )
     return cond
-
-
-def _sigma(
-    wrench: NDArray[np.float64],
-    R: NDArray[np.float64],
-    var_mean: NDArray[np.float64],
-    count: NDArray[np.float64],
-    paper: Fit,
-) -> NDArray[np.float64]:
-    """Standard deviation of each pose's mean reading, shape (P, 6): the joint fit's weights.
-
-    From the pooled scatter of repeated readings per channel where there are any (scaled by
-    1/sqrt(n) per pose), else from the paper fit's force and torque residuals.
-    """
-    repeated = count > 1
-    if np.any(repeated):
-        # Pooled within-pose variance of one reading, per channel.
-        single_var = np.sum(
-            var_mean[repeated] * count[repeated, None] * (count[repeated, None] - 1), axis=0
-        )
-        single_var /= np.sum(count[repeated] - 1)
-        if np.all(single_var > 0.0):
-            return np.sqrt(single_var[None, :] / count[:, None])
-    r = predict_wrench(paper.theta, R) - wrench
-    group = np.array([np.sqrt(np.mean(r[:, :3] ** 2)), np.sqrt(np.mean(r[:, 3:] ** 2))])
-    group = np.maximum(group, 1e-12 * np.maximum(np.abs(wrench).max(), 1.0))
-    return np.broadcast_to(np.repeat(group, 3), wrench.shape).copy()
-
-
-def _fit(
-    method: Method,
-    wrench: NDArray[np.float64],
-    R: NDArray[np.float64],
-    var_mean: NDArray[np.float64],
-    count: NDArray[np.float64],
-) -> Fit:
-    paper = fit_paper(wrench, R)
-    if method == "paper":
-        return paper
-    return fit_joint(wrench, R, _sigma(wrench, R, var_mean, count, paper), paper.theta)
 
 
 def _propagate(
@@ -260,8 +277,10 @@ def calibrate(
         samples: readings at three or more distinct poses (see :func:`ftcomp.io.read_samples`).
         method: ``"paper"`` for the paper's two-stage linear least squares (Eq. 7-11, 16-19),
             ``"joint"`` for the weighted joint nonlinear fit (the default).
-        leave_one_out: also refit without each pose in turn to measure prediction error
-            (``loo_error`` is NaN when false or with only 3 poses).
+        leave_one_out: also measure the prediction error on each pose left out of the fit
+            (``loo_error``; NaN when false or with only 3 poses). Exact for the paper method
+            (closed form) and for the joint method up to 30 poses (refits); beyond, the joint
+            method's is a one-step linearised approximation (:mod:`ftcomp.calibration.loo`).
 
     Raises:
         IdentificationError: fewer than 3 distinct poses, or poses that cannot separate bias
@@ -271,7 +290,7 @@ def calibrate(
         raise ParameterError(f"method must be 'paper' or 'joint', got {method!r}")
     ids, R, wrench, count, var_mean = pose_means(samples)
     cond = _check_identifiable(R, samples.source)
-    fit = _fit(method, wrench, R, var_mean, count)
+    fit, sigma = fit_method(method, wrench, R, var_mean, count)
     model = _model(fit.theta)
     gvu = _propagate(
         lambda th: np.array(tilt_from_gravity_in_base(th[0:3])), fit.theta, fit.covariance
@@ -292,15 +311,8 @@ def calibrate(
     relative[~np.isfinite(relative)] = np.nan
 
     loo = np.full_like(wrench, np.nan)
-    if leave_one_out and len(ids) > 3:
-        for k in range(len(ids)):
-            keep = np.arange(len(ids)) != k
-            try:
-                _check_identifiable(R[keep], samples.source)
-            except IdentificationError:
-                continue
-            sub = _fit(method, wrench[keep], R[keep], var_mean[keep], count[keep])
-            loo[k] = wrench[k] - predict_wrench(sub.theta, R[k : k + 1])[0]
+    if leave_one_out:
+        loo = _leave_one_out(method, wrench, R, var_mean, count, fit, sigma)
 
     warnings = list(samples.warnings)
     if cond > CONDITION_WARNING:

@@ -13,21 +13,27 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import least_squares
 
 from ftcomp.model import skew
 
 __all__ = [
+    "CONDITION_SINGULAR",
     "Fit",
     "Method",
     "fit_joint",
+    "fit_method",
     "fit_paper",
     "force_regressor",
+    "joint_sigma",
     "predict_wrench",
+    "skew_stack",
     "torque_regressor",
 ]
 
 Method = Literal["paper", "joint"]
+
+#: Condition number of the force regressor above which bias and gravity are not separable.
+CONDITION_SINGULAR = 1e7
 
 #: Slices of the parameter vector theta.
 A, F0, M0, P = slice(0, 3), slice(3, 6), slice(6, 9), slice(9, 12)
@@ -54,12 +60,18 @@ def force_regressor(R_base_sensor: NDArray[np.float64]) -> NDArray[np.float64]:
     return blocks.reshape(3 * n, 6)
 
 
+def skew_stack(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The cross-product matrix of each row of ``v`` (N, 3): shape (N, 3, 3)."""
+    out = np.zeros((len(v), 3, 3))
+    out[:, 0, 1], out[:, 0, 2], out[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    out[:, 1, 0], out[:, 2, 0], out[:, 2, 1] = v[:, 2], -v[:, 1], v[:, 0]
+    return out
+
+
 def torque_regressor(force: NDArray[np.float64]) -> NDArray[np.float64]:
     """Eq. 16: rows ``[-skew(f_i), I]`` stacked, shape (3P, 6), unknowns ``[P, b]``."""
     n = len(force)
-    blocks = np.concatenate(
-        [-np.array([skew(f) for f in force]), np.broadcast_to(np.eye(3), (n, 3, 3))], axis=2
-    )
+    blocks = np.concatenate([-skew_stack(force), np.broadcast_to(np.eye(3), (n, 3, 3))], axis=2)
     return blocks.reshape(3 * n, 6)
 
 
@@ -129,7 +141,7 @@ def _jacobian(
     J[:, :3, F0] = np.eye(3)
     J[:, 3:, A] = skew(theta[P]) @ Rt
     J[:, 3:, M0] = np.eye(3)
-    J[:, 3:, P] = -np.array([skew(g) for g in g_s])
+    J[:, 3:, P] = -skew_stack(g_s)
     return (J / sigma[:, :, None]).reshape(6 * n, 12)
 
 
@@ -153,6 +165,8 @@ def fit_joint(
     Returns:
         The fit, with covariance ``s^2 (J^T J)^-1``, ``s^2`` the weighted residual variance.
     """
+    from scipy.optimize import least_squares  # imported here: it takes a second to load
+
     result = least_squares(
         _residuals,
         initial,
@@ -167,3 +181,51 @@ def fit_joint(
     dof = max(J.shape[0] - J.shape[1], 1)
     s2 = float(np.sum(result.fun**2)) / dof
     return Fit(np.asarray(result.x, dtype=float), s2 * np.linalg.pinv(J.T @ J))
+
+
+def joint_sigma(
+    wrench: NDArray[np.float64],
+    R_base_sensor: NDArray[np.float64],
+    var_mean: NDArray[np.float64],
+    count: NDArray[np.float64],
+    paper: Fit,
+) -> NDArray[np.float64]:
+    """Standard deviation of each pose's mean reading, shape (P, 6): the joint fit's weights.
+
+    From the pooled scatter of repeated readings per channel where there are any (scaled by
+    1/sqrt(n) per pose), else from the paper fit's force and torque residuals.
+    """
+    repeated = count > 1
+    if np.any(repeated):
+        # Pooled within-pose variance of one reading, per channel.
+        single_var = np.sum(
+            var_mean[repeated] * count[repeated, None] * (count[repeated, None] - 1), axis=0
+        )
+        single_var /= np.sum(count[repeated] - 1)
+        if np.all(single_var > 0.0):
+            return np.sqrt(single_var[None, :] / count[:, None])
+    r = predict_wrench(paper.theta, R_base_sensor) - wrench
+    group = np.array([np.sqrt(np.mean(r[:, :3] ** 2)), np.sqrt(np.mean(r[:, 3:] ** 2))])
+    group = np.maximum(group, 1e-12 * np.maximum(np.abs(wrench).max(), 1.0))
+    return np.broadcast_to(np.repeat(group, 3), wrench.shape).copy()
+
+
+def fit_method(
+    method: Method,
+    wrench: NDArray[np.float64],
+    R_base_sensor: NDArray[np.float64],
+    var_mean: NDArray[np.float64],
+    count: NDArray[np.float64],
+) -> tuple[Fit, NDArray[np.float64] | None]:
+    """Fit per-pose means with ``method``; returns the fit and the joint fit's weights (sigma,
+    (P, 6); None for the paper method).
+
+    Args:
+        wrench: per-pose mean readings (P, 6); ``var_mean`` the variance of each mean (P, 6),
+            NaN where a pose has one reading; ``count`` readings per pose (P,).
+    """
+    paper = fit_paper(wrench, R_base_sensor)
+    if method == "paper":
+        return paper, None
+    sigma = joint_sigma(wrench, R_base_sensor, var_mean, count, paper)
+    return fit_joint(wrench, R_base_sensor, sigma, paper.theta), sigma

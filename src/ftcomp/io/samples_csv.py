@@ -1,85 +1,302 @@
 """The sample CSV: F/T readings with the sensor's orientation, one row per reading.
 
-Format: a header row; columns ``fx,fy,fz,tx,ty,tz`` (N, N*m, sensor frame); exactly one
-orientation encoding of ``R_base_sensor`` (``qx,qy,qz,qw`` | ``rx,ry,rz`` [rad] |
-``alpha_deg,beta_deg,gamma_deg``, see :mod:`ftcomp.frames`); optional ``pose`` (an id: rows with
-the same id are readings at one pose) and ``t`` [s]; any other column is carried along and
-otherwise ignored. Comma-delimited, UTF-8.
+Format: a header row and comma-delimited UTF-8 rows with the columns of
+:mod:`ftcomp.io.sample_format` (the wrench, one orientation encoding, optional ``pose`` and
+``t``; any other column is carried along). Every check and every message is in that module.
 
-Every problem is reported as one :class:`~ftcomp.errors.InputFileError` naming the file, the data
-row (1 = first row after the header), the line and the column.
+Files of any length are read in chunks of whole lines (:mod:`ftcomp.io.chunks`) with bounded
+memory. Each chunk is parsed by pyarrow's multi-threaded CSV parser into numpy arrays and checked
+as a block; only a chunk that fails is parsed again cell by cell
+(:func:`~ftcomp.io.sample_format.parse_rows`) to name the first bad cell: every problem is one
+:class:`~ftcomp.errors.InputFileError` naming the file, the data row (1 = first row after the
+header), the line and the column. :func:`read_samples` returns every row at once;
+:func:`open_samples` streams blocks (and reads ``.parquet`` files, :mod:`ftcomp.io.parquet`).
 """
 
 from __future__ import annotations
 
 import csv
-import difflib
 import io
-import math
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from types import TracebackType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, OrientationEncoding, encode_orientation
 from ftcomp.io.atomic import atomic_write_text
+from ftcomp.io.chunks import (
+    DEFAULT_CHUNK_BYTES,
+    CsvRows,
+    LineChunk,
+    drop_blank_lines,
+    iter_line_chunks,
+    line_ends,
+    open_text,
+    read_first_line,
+)
+from ftcomp.io.sample_format import (
+    OrientationCheck,
+    SampleBlock,
+    SampleLayout,
+    check_header,
+    check_values,
+    parse_rows,
+)
 from ftcomp.samples import WRENCH_COLUMNS, Samples
 
-__all__ = ["read_samples", "write_samples", "write_table"]
+if TYPE_CHECKING:
+    from ftcomp.io.parquet import ParquetSampleReader
 
-_OTHER_DELIMITERS = (";", "\t", "|")
-_QUATERNION_NORM_TOLERANCE = 0.01
+__all__ = [
+    "SampleCsvReader",
+    "open_samples",
+    "read_samples",
+    "write_samples",
+    "write_table",
+]
 
-
-def _suggest(name: str, header: Sequence[str]) -> str:
-    lowered = {h.lower(): h for h in header}
-    if name in lowered and lowered[name] != name:
-        return f" (found {lowered[name]!r}: column names are case-sensitive)"
-    close = difflib.get_close_matches(name, header, n=1, cutoff=0.6)
-    return f" (did you mean {close[0]!r}?)" if close else ""
-
-
-def _find_encoding(header: Sequence[str], where: str) -> OrientationEncoding:
-    present = set(header)
-    complete = [enc for enc, cols in ENCODING_COLUMNS.items() if present.issuperset(cols)]
-    if len(complete) > 1:
-        names = " and ".join(f"{enc} ({','.join(ENCODING_COLUMNS[enc])})" for enc in complete)
-        raise InputFileError(f"{where}: two orientation encodings at once, {names}: keep one")
-    if complete:
-        return complete[0]
-    for enc, cols in ENCODING_COLUMNS.items():
-        found = [c for c in cols if c in present]
-        if found:
-            missing = next(c for c in cols if c not in present)
-            raise InputFileError(
-                f"{where}: missing column {missing!r} of the {enc} orientation "
-                f"({','.join(cols)}){_suggest(missing, header)}"
-            )
-    options = " | ".join(",".join(cols) for cols in ENCODING_COLUMNS.values())
-    hint = ""
-    for cols in ENCODING_COLUMNS.values():
-        for col in cols:
-            suggestion = _suggest(col, header)
-            if suggestion:
-                hint = f"; for {col!r}{suggestion}"
-                break
-        if hint:
-            break
-    raise InputFileError(f"{where}: no orientation columns; give one of {options}{hint}")
+_ARROW_BLOCK_BYTES = 1 << 20  # pyarrow parses blocks of this size in parallel
+_EXACT_LINES = 256  # a failing piece this small is parsed cell by cell to find the bad cell
 
 
-def _cell_value(cell: str, where: str) -> float:
+def _fast_parse(
+    text: bytes, rows: int, layout: SampleLayout, with_table: bool
+) -> tuple[NDArray[np.float64], NDArray[np.str_] | None, Any] | None:
+    """Parse ``rows`` whole non-blank CSV lines ``text`` with pyarrow; None if any row needs a
+    closer look."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    import pyarrow.csv as pcsv
+
+    names = [f"c{i}" for i in range(len(layout.header))]
+    index = layout.index
+    numeric = {names[index[c]] for c in layout.numeric}
+    wanted = [
+        n
+        for n in names
+        if with_table or n in numeric or (layout.has_pose and n == names[index["pose"]])
+    ]
     try:
-        value = float(cell)
-    except ValueError:
-        raise InputFileError(f"{where}: {cell.strip()!r} is not a number") from None
-    if not math.isfinite(value):
-        raise InputFileError(f"{where}: {cell.strip()} is not finite")
-    return value
+        table = pcsv.read_csv(
+            pa.BufferReader(text),
+            read_options=pcsv.ReadOptions(column_names=names, block_size=_ARROW_BLOCK_BYTES),
+            parse_options=pcsv.ParseOptions(newlines_in_values=False),
+            convert_options=pcsv.ConvertOptions(
+                column_types={n: pa.float64() if n in numeric else pa.string() for n in wanted},
+                include_columns=wanted,
+                null_values=[],
+                strings_can_be_null=False,
+                quoted_strings_can_be_null=False,
+                check_utf8=False,
+            ),
+        )
+    except (pa.ArrowException, ValueError):
+        return None
+    if table.num_rows != rows:
+        return None
+    values = np.empty((table.num_rows, len(layout.numeric)))
+    for j, name in enumerate(layout.numeric):
+        values[:, j] = table.column(names[index[name]]).to_numpy()
+    if not check_values(values, layout):
+        return None
+    pose = None
+    if layout.has_pose:
+        ids = pc.utf8_trim_whitespace(table.column(names[index["pose"]]))
+        if pc.min(pc.utf8_length(ids)).as_py() == 0:
+            return None
+        pose = np.asarray(ids.to_numpy(), dtype=str)
+    return values, pose, table.rename_columns(list(layout.header)) if with_table else None
+
+
+@dataclass(frozen=True)
+class _Rows:
+    """Parsed rows: values (N, len(layout.numeric)), pose ids, table, text and its line ends."""
+
+    values: NDArray[np.float64]
+    pose: NDArray[np.str_] | None
+    table: Any
+    text: bytes
+    ends: NDArray[np.intp]
+
+    def then(self, other: _Rows) -> _Rows:
+        """These rows followed by ``other``."""
+        import pyarrow as pa
+
+        return _Rows(
+            np.concatenate([self.values, other.values]),
+            None
+            if self.pose is None or other.pose is None
+            else np.concatenate([self.pose, other.pose]),
+            None if self.table is None else pa.concat_tables([self.table, other.table]),
+            self.text + other.text,
+            np.concatenate([self.ends, other.ends + len(self.text)]),
+        )
+
+
+class SampleCsvReader:
+    """A sample CSV read block by block, with bounded memory.
+
+    The header is read and checked on opening; :meth:`blocks` yields checked
+    :class:`~ftcomp.io.sample_format.SampleBlock` s. Use as a context manager.
+
+    Args:
+        path: the CSV file.
+        force_range_N, torque_range_Nm: a reading beyond +-these is an error (saturation).
+        chunk_bytes: bytes read at a time (default :data:`DEFAULT_CHUNK_BYTES`).
+        with_text: keep each block's rows as CSV text (for writing them back out).
+        with_table: also give each block's columns as a pyarrow table (for Parquet output).
+    """
+
+    def __init__(
+        self,
+        path: str | os.PathLike[str],
+        *,
+        force_range_N: float | None = None,
+        torque_range_Nm: float | None = None,
+        chunk_bytes: int | None = None,
+        with_text: bool = True,
+        with_table: bool = False,
+    ) -> None:
+        self.source = str(path)
+        self.rows = 0
+        self._chunk_bytes = chunk_bytes or DEFAULT_CHUNK_BYTES
+        self._with_text, self._with_table = with_text, with_table
+        self._handle = open_text(path)
+        try:
+            header = next(csv.reader([read_first_line(self._handle, self.source)]), [])
+            if not any(cell.strip() for cell in header) and self._rest_is_blank():
+                raise InputFileError(
+                    f"{self.source}: empty file; expected a header with "
+                    f"{','.join(WRENCH_COLUMNS)} and one orientation encoding"
+                )
+            self.layout = check_header(
+                header,
+                self.source,
+                where=f"{self.source}, header (line 1)",
+                force_range_N=force_range_N,
+                torque_range_Nm=torque_range_Nm,
+            )
+        except BaseException:
+            self._handle.close()
+            raise
+        self._orientation = OrientationCheck(self.layout)
+
+    def _rest_is_blank(self) -> bool:
+        return all(not c.data.strip() for c in iter_line_chunks(self._handle, self.source))
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What looked wrong but was accepted, over the blocks read so far."""
+        return self._orientation.warnings
+
+    def blocks(self) -> Iterator[SampleBlock]:
+        """Every block of rows, in file order.
+
+        Raises:
+            InputFileError: at the first problem (naming row, line and column), or when the
+                file has a header but no data rows.
+        """
+        for chunk in iter_line_chunks(
+            self._handle, self.source, chunk_bytes=self._chunk_bytes, first_line=2
+        ):
+            block = self._block(chunk)
+            if block is not None:
+                yield block
+        if self.rows == 0:
+            raise InputFileError(f"{self.source}: a header but no data rows")
+
+    def _parse(self, data: bytes, ends: NDArray[np.intp], first_row: int, first_line: int) -> _Rows:
+        """Parse whole lines ``data`` (newlines at ``ends``): by pyarrow, or, where it fails, by
+        halving until the failing piece is small enough to parse cell by cell cheaply."""
+        layout = self.layout
+        text, kept = drop_blank_lines(data, ends)
+        parsed = _fast_parse(text, len(kept), layout, self._with_table) if text else None
+        if parsed is not None:
+            return _Rows(*parsed, text, kept)
+        if len(ends) <= _EXACT_LINES or b'"' in data:  # quotes: a cell may span lines
+            exact = parse_rows(
+                data.decode("utf-8"), layout, first_row=first_row, first_line=first_line
+            )
+            return _Rows(
+                exact.values,
+                np.array(exact.pose, dtype=str) if exact.pose is not None else None,
+                exact.table(layout) if self._with_table else None,
+                exact.text,
+                line_ends(exact.text),
+            )
+        half = len(ends) // 2
+        cut = int(ends[half - 1]) + 1
+        head = self._parse(data[:cut], ends[:half], first_row, first_line)
+        tail = self._parse(
+            data[cut:], ends[half:] - cut, first_row + len(head.values), first_line + half
+        )
+        return head.then(tail)
+
+    def _block(self, chunk: LineChunk) -> SampleBlock | None:
+        rows = self._parse(chunk.data, chunk.ends, self.rows + 1, chunk.first_line)
+        if not len(rows.values):
+            return None
+        first_row = self.rows + 1
+        self.rows += len(rows.values)
+        k = 6 + len(ENCODING_COLUMNS[self.layout.encoding])
+        return SampleBlock(
+            first_row=first_row,
+            wrench_sensor=np.ascontiguousarray(rows.values[:, :6]),
+            R_base_sensor=self._orientation.rotations(rows.values[:, 6:k], first_row),
+            t=rows.values[:, k].copy() if self.layout.has_t else None,
+            pose=rows.pose,
+            text=rows.text if self._with_text else None,
+            text_ends=rows.ends if self._with_text else None,
+            table=rows.table,
+            byte_range=(chunk.start, chunk.stop),
+        )
+
+    def close(self) -> None:
+        """Close the file."""
+        self._handle.close()
+
+    def __enter__(self) -> SampleCsvReader:
+        return self
+
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()
+
+
+def open_samples(
+    path: str | os.PathLike[str],
+    *,
+    force_range_N: float | None = None,
+    torque_range_Nm: float | None = None,
+    with_text: bool = True,
+    with_table: bool = False,
+) -> SampleCsvReader | ParquetSampleReader:
+    """A block reader for a sample file: Parquet if the name ends in ``.parquet``, else CSV."""
+    if Path(path).suffix.lower() == ".parquet":
+        from ftcomp.io.parquet import ParquetSampleReader
+
+        return ParquetSampleReader(
+            path,
+            force_range_N=force_range_N,
+            torque_range_Nm=torque_range_Nm,
+            with_text=with_text,
+            with_table=with_table,
+        )
+    return SampleCsvReader(
+        path,
+        force_range_N=force_range_N,
+        torque_range_Nm=torque_range_Nm,
+        with_text=with_text,
+        with_table=with_table,
+    )
 
 
 def read_samples(
@@ -88,132 +305,37 @@ def read_samples(
     force_range_N: float | None = None,
     torque_range_Nm: float | None = None,
 ) -> Samples:
-    """Read and check a sample CSV.
+    """Read and check a sample file (CSV, or Parquet when the name ends in ``.parquet``).
 
     Args:
-        path: the CSV file.
+        path: the file.
         force_range_N: if given, a force reading beyond +-this [N] is an error (saturated sensor).
         torque_range_Nm: if given, a torque reading beyond +-this [N*m] is an error.
 
     Raises:
         InputFileError: naming file, row, line and column of the first problem found.
     """
-    source = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputFileError(f"{source}: no such file") from None
-    except IsADirectoryError:
-        raise InputFileError(f"{source}: is a directory, expected a CSV file") from None
-    except UnicodeDecodeError as exc:
-        raise InputFileError(f"{source}: not UTF-8 text ({exc.reason})") from None
-    except OSError as exc:
-        raise InputFileError(f"{source}: cannot read ({exc.strerror})") from None
-    if not text.strip():
-        raise InputFileError(
-            f"{source}: empty file; expected a header with {','.join(WRENCH_COLUMNS)} "
-            "and one orientation encoding"
-        )
-
-    reader = csv.reader(io.StringIO(text))
-    raw_header = next(reader)
-    header = tuple(name.strip() for name in raw_header)
-    where = f"{source}, header (line 1)"
-    if len(header) == 1:
-        for delim in _OTHER_DELIMITERS:
-            if delim in header[0]:
-                raise InputFileError(
-                    f"{where}: one column {header[0][:40]!r}; the delimiter must be ',' "
-                    f"(found {delim!r})"
-                )
-    duplicates = sorted({name for name in header if header.count(name) > 1 and name})
-    if duplicates:
-        raise InputFileError(f"{where}: column {duplicates[0]!r} appears more than once")
-    for name in WRENCH_COLUMNS:
-        if name not in header:
-            raise InputFileError(f"{where}: missing column {name!r}{_suggest(name, header)}")
-    encoding = _find_encoding(header, where)
-    orientation_cols = ENCODING_COLUMNS[encoding]
-    index = {name: i for i, name in enumerate(header)}
-    numeric_cols = (*WRENCH_COLUMNS, *orientation_cols, *(("t",) if "t" in index else ()))
-
-    rows: list[tuple[str, ...]] = []
-    values: list[list[float]] = []
-    poses: list[str] = []
-    for cells in reader:
-        if not cells or all(not c.strip() for c in cells):
-            continue
-        row_no = len(rows) + 1
-        line = reader.line_num
-        if len(cells) != len(header):
-            raise InputFileError(
-                f"{source}, row {row_no} (line {line}): {len(cells)} cells but the header "
-                f"has {len(header)} columns"
-            )
-        parsed = [
-            _cell_value(cells[index[c]], f"{source}, row {row_no} (line {line}), column {c!r}")
-            for c in numeric_cols
-        ]
-        if "pose" in index:
-            pose_id = cells[index["pose"]].strip()
-            if not pose_id:
-                raise InputFileError(
-                    f"{source}, row {row_no} (line {line}), column 'pose': empty pose id"
-                )
-            poses.append(pose_id)
-        for col, limit in (("f", force_range_N), ("t", torque_range_Nm)):
-            if limit is None:
-                continue
-            for axis, value in zip("xyz", parsed[(0 if col == "f" else 3) :][:3], strict=True):
-                if abs(value) > limit:
-                    unit = "N" if col == "f" else "N*m"
-                    raise InputFileError(
-                        f"{source}, row {row_no} (line {line}), column '{col}{axis}': "
-                        f"{value:g} {unit} is beyond the sensor range +-{limit:g} {unit}"
-                    )
-        rows.append(tuple(cells))
-        values.append(parsed)
-    if not rows:
-        raise InputFileError(f"{source}: a header but no data rows")
-
-    data = np.array(values)
-    wrench = data[:, :6]
-    orient = data[:, 6 : 6 + len(orientation_cols)]
-    t = data[:, -1] if "t" in index else None
-    warnings: list[str] = []
-    if encoding == "quaternion":
-        norms = np.linalg.norm(orient, axis=1)
-        bad = np.flatnonzero(norms < 1e-12)
-        if bad.size:
-            raise InputFileError(
-                f"{source}, row {bad[0] + 1}, columns qx,qy,qz,qw: zero-norm quaternion"
-            )
-        off = np.flatnonzero(np.abs(norms - 1.0) > _QUATERNION_NORM_TOLERANCE)
-        if off.size:
-            warnings.append(
-                f"{source}: {off.size} quaternion(s) not of unit norm (row {off[0] + 1}: "
-                f"{norms[off[0]]:.4g}); normalised"
-            )
-        rotations = Rotation.from_quat(orient)
-    elif encoding == "rotvec":
-        rotations = Rotation.from_rotvec(orient)
-    else:
-        if 0.0 < np.max(np.abs(orient)) <= math.pi + 1e-3:  # radians, rounded
-            warnings.append(
-                f"{source}: every alpha_deg, beta_deg, gamma_deg is within +-pi: were the "
-                "angles given in radians? They are read as degrees"
-            )
-        rotations = Rotation.from_euler("ZYX", orient, degrees=True)
+    with open_samples(
+        path, force_range_N=force_range_N, torque_range_Nm=torque_range_Nm, with_text=False
+    ) as reader:
+        blocks = list(reader.blocks())
+        layout, warnings = reader.layout, reader.warnings
+    rows: Sequence[tuple[str, ...]] = ()
+    if isinstance(reader, SampleCsvReader):
+        spans = [(*b.byte_range, b.first_row - 1, len(b)) for b in blocks if b.byte_range]
+        rows = CsvRows(reader.source, spans)
+    pose = [b.pose for b in blocks if b.pose is not None]
+    t = [b.t for b in blocks if b.t is not None]
     return Samples(
-        wrench_sensor=wrench,
-        R_base_sensor=rotations.as_matrix().reshape(-1, 3, 3),
-        encoding=encoding,
-        pose=np.array(poses) if "pose" in index else None,
-        t=t,
-        header=header,
-        rows=tuple(rows),
-        source=source,
-        warnings=tuple(warnings),
+        wrench_sensor=np.concatenate([b.wrench_sensor for b in blocks]),
+        R_base_sensor=np.concatenate([b.R_base_sensor for b in blocks]),
+        encoding=layout.encoding,
+        pose=np.concatenate(pose) if layout.has_pose else None,
+        t=np.concatenate(t) if layout.has_t else None,
+        header=layout.header,
+        rows=rows,
+        source=reader.source,
+        warnings=warnings,
     )
 
 

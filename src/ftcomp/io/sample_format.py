@@ -1,0 +1,376 @@
+"""The sample file format and every check of it, in one place, for CSV and Parquet alike.
+
+Columns: ``fx,fy,fz,tx,ty,tz`` (N, N*m, sensor frame); exactly one orientation encoding of
+``R_base_sensor`` (``qx,qy,qz,qw`` | ``rx,ry,rz`` [rad] | ``alpha_deg,beta_deg,gamma_deg``, see
+:mod:`ftcomp.frames`); optional ``pose`` (an id: rows with the same id are readings at one pose)
+and ``t`` [s]; any other column is carried along and otherwise ignored.
+
+The readers (:mod:`ftcomp.io.samples_csv`, :mod:`ftcomp.io.parquet`) check whole blocks of rows
+at once with numpy and only when a block fails do they look for the first bad cell, with the
+rules here, to name its row and column: a message costs nothing until a cell is bad.
+
+**Numbers** are decimal: an optional sign, digits with an optional point, an optional exponent
+(``12``, ``-0.5``, ``.5``, ``3.``, ``1e-3``), with spaces around allowed. Python's ``float``
+accepts more (``3_3445`` as 33445, ``١٢``, ``infinity``); those are errors here, and ``nan`` and
+``inf`` are read only to be rejected as not finite.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import io
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from ftcomp.errors import InputFileError
+from ftcomp.frames import ENCODING_COLUMNS, OrientationEncoding
+from ftcomp.samples import WRENCH_COLUMNS
+
+__all__ = [
+    "OrientationCheck",
+    "ParsedRows",
+    "SampleBlock",
+    "SampleLayout",
+    "check_header",
+    "check_values",
+    "first_bad_value",
+    "parse_number",
+    "parse_rows",
+]
+
+_OTHER_DELIMITERS = (";", "\t", "|")
+_QUATERNION_NORM_TOLERANCE = 0.01
+#: A number as the sample files write it (see the module docstring); nan/inf only to reject.
+_NUMBER = re.compile(
+    r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf|infinity|nan)",
+    re.IGNORECASE | re.ASCII,
+)
+
+
+def _suggest(name: str, header: Sequence[str]) -> str:
+    lowered = {h.lower(): h for h in header}
+    if name in lowered and lowered[name] != name:
+        return f" (found {lowered[name]!r}: column names are case-sensitive)"
+    close = difflib.get_close_matches(name, header, n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def _find_encoding(header: Sequence[str], where: str) -> OrientationEncoding:
+    present = set(header)
+    complete = [enc for enc, cols in ENCODING_COLUMNS.items() if present.issuperset(cols)]
+    if len(complete) > 1:
+        names = " and ".join(f"{enc} ({','.join(ENCODING_COLUMNS[enc])})" for enc in complete)
+        raise InputFileError(f"{where}: two orientation encodings at once, {names}: keep one")
+    if complete:
+        return complete[0]
+    for enc, cols in ENCODING_COLUMNS.items():
+        found = [c for c in cols if c in present]
+        if found:
+            missing = next(c for c in cols if c not in present)
+            raise InputFileError(
+                f"{where}: missing column {missing!r} of the {enc} orientation "
+                f"({','.join(cols)}){_suggest(missing, header)}"
+            )
+    options = " | ".join(",".join(cols) for cols in ENCODING_COLUMNS.values())
+    hint = ""
+    for col in (c for cols in ENCODING_COLUMNS.values() for c in cols):
+        suggestion = _suggest(col, header)
+        if suggestion:
+            hint = f"; for {col!r}{suggestion}"
+            break
+    raise InputFileError(f"{where}: no orientation columns; give one of {options}{hint}")
+
+
+@dataclass(frozen=True)
+class SampleLayout:
+    """A sample file's columns, checked: where each quantity is and which limits apply.
+
+    Attributes:
+        source: the file, for messages.
+        header: the column names, stripped, in file order.
+        encoding: the orientation encoding present.
+        numeric: the columns read as numbers, in the order of checks and of ``values`` arrays:
+            the wrench, the orientation, then ``t`` if present.
+        force_range_N, torque_range_Nm: a reading beyond +- these is an error (None: no limit).
+    """
+
+    source: str
+    header: tuple[str, ...]
+    encoding: OrientationEncoding
+    numeric: tuple[str, ...]
+    force_range_N: float | None = None
+    torque_range_Nm: float | None = None
+    index: dict[str, int] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "index", {name: i for i, name in enumerate(self.header)})
+
+    @property
+    def has_pose(self) -> bool:
+        """Whether a ``pose`` column groups the rows."""
+        return "pose" in self.index
+
+    @property
+    def has_t(self) -> bool:
+        """Whether a ``t`` [s] column is present."""
+        return "t" in self.index
+
+
+def check_header(
+    header: Sequence[str],
+    source: str,
+    *,
+    where: str,
+    force_range_N: float | None = None,
+    torque_range_Nm: float | None = None,
+) -> SampleLayout:
+    """Check the column names; ``where`` names them in messages (``"f.csv, header (line 1)"``).
+
+    Raises:
+        InputFileError: wrong delimiter, a duplicated or missing column, no or two encodings.
+    """
+    names = tuple(name.strip() for name in header)
+    if len(names) == 1:
+        for delim in _OTHER_DELIMITERS:
+            if delim in names[0]:
+                raise InputFileError(
+                    f"{where}: one column {names[0][:40]!r}; the delimiter must be ',' "
+                    f"(found {delim!r})"
+                )
+    duplicates = sorted({name for name in names if names.count(name) > 1 and name})
+    if duplicates:
+        raise InputFileError(f"{where}: column {duplicates[0]!r} appears more than once")
+    for name in WRENCH_COLUMNS:
+        if name not in names:
+            raise InputFileError(f"{where}: missing column {name!r}{_suggest(name, names)}")
+    encoding = _find_encoding(names, where)
+    numeric = (*WRENCH_COLUMNS, *ENCODING_COLUMNS[encoding], *(("t",) if "t" in names else ()))
+    return SampleLayout(source, names, encoding, numeric, force_range_N, torque_range_Nm)
+
+
+def parse_number(cell: str, where: str) -> float:
+    """One cell as a finite number, by the rule of the module docstring.
+
+    Raises:
+        InputFileError: ``"<where>: 'x' is not a number"`` or ``"<where>: nan is not finite"``.
+    """
+    text = cell.strip()
+    if not _NUMBER.fullmatch(text):
+        raise InputFileError(f"{where}: {text!r} is not a number")
+    value = float(text)
+    if not math.isfinite(value):
+        raise InputFileError(f"{where}: {text} is not finite")
+    return value
+
+
+def _check_range(values: Sequence[float], layout: SampleLayout, where: str) -> None:
+    for first, limit, unit, prefix in (
+        (0, layout.force_range_N, "N", "f"),
+        (3, layout.torque_range_Nm, "N*m", "t"),
+    ):
+        if limit is None:
+            continue
+        for axis, value in zip("xyz", values[first : first + 3], strict=True):
+            if abs(value) > limit:
+                raise InputFileError(
+                    f"{where}, column '{prefix}{axis}': {value:g} {unit} is beyond the sensor "
+                    f"range +-{limit:g} {unit}"
+                )
+
+
+def check_values(values: NDArray[np.float64], layout: SampleLayout) -> bool:
+    """Whether a block of ``values`` (N, len(layout.numeric)) passes every value check at once:
+    all finite and within the sensor range. When it does not, the reader names the first bad
+    cell with :func:`parse_rows` (CSV, with line numbers) or :func:`first_bad_value`."""
+    if not np.isfinite(values).all():
+        return False
+    for first, limit in ((0, layout.force_range_N), (3, layout.torque_range_Nm)):
+        if limit is not None and np.abs(values[:, first : first + 3]).max(initial=0.0) > limit:
+            return False
+    return True
+
+
+def first_bad_value(values: NDArray[np.float64], layout: SampleLayout, first_row: int) -> None:
+    """Raise for the first row of ``values`` (row-major, then column order) that fails
+    :func:`check_values` (for files without line numbers, e.g. Parquet)."""
+    for i in np.flatnonzero(~np.isfinite(values).all(axis=1) | _beyond(values, layout)):
+        where = f"{layout.source}, row {first_row + int(i)}"
+        for name, value in zip(layout.numeric, values[i].tolist(), strict=True):
+            if not math.isfinite(value):
+                raise InputFileError(f"{where}, column {name!r}: {value} is not finite")
+        _check_range(values[i].tolist(), layout, where)
+
+
+def _beyond(values: NDArray[np.float64], layout: SampleLayout) -> NDArray[np.bool_]:
+    out = np.zeros(len(values), dtype=bool)
+    for first, limit in ((0, layout.force_range_N), (3, layout.torque_range_Nm)):
+        if limit is not None:
+            out |= np.any(np.abs(values[:, first : first + 3]) > limit, axis=1)
+    return out
+
+
+@dataclass(frozen=True)
+class ParsedRows:
+    """Rows parsed cell by cell: ``values`` (N, len(layout.numeric)), ``pose`` ids (or None),
+    ``cells`` of every row as read, and ``text``: the rows as CSV lines ending in ``\\n``."""
+
+    values: NDArray[np.float64]
+    pose: list[str] | None
+    cells: list[list[str]]
+    text: bytes
+
+    def table(self, layout: SampleLayout) -> Any:
+        """Every column as a pyarrow table: the numeric ones as float64, the others as text."""
+        import pyarrow as pa
+
+        numeric = {name: j for j, name in enumerate(layout.numeric)}
+        columns = [
+            pa.array(self.values[:, numeric[name]])
+            if name in numeric
+            else pa.array([r[i] for r in self.cells], pa.string())
+            for i, name in enumerate(layout.header)
+        ]
+        return pa.table(columns, names=list(layout.header))
+
+
+def parse_rows(text: str, layout: SampleLayout, *, first_row: int, first_line: int) -> ParsedRows:
+    """Parse CSV data rows one cell at a time, checking every rule; blank rows are skipped.
+
+    Args:
+        text: the rows (after the header).
+        layout: the checked header.
+        first_row: the data-row number of the first row (1 = first after the header).
+        first_line: the physical line number of the text's first line.
+
+    Raises:
+        InputFileError: naming file, row, line and column of the first problem.
+    """
+    source, index = layout.source, layout.index
+    numeric = [index[c] for c in layout.numeric]
+    reader = csv.reader(io.StringIO(text))
+    values: list[list[float]] = []
+    poses: list[str] = []
+    kept: list[list[str]] = []
+    for cells in reader:
+        if not cells or all(not c.strip() for c in cells):
+            continue
+        where = f"{source}, row {first_row + len(kept)} (line {first_line - 1 + reader.line_num})"
+        if len(cells) != len(layout.header):
+            raise InputFileError(
+                f"{where}: {len(cells)} cells but the header has {len(layout.header)} columns"
+            )
+        parsed = [
+            parse_number(cells[i], f"{where}, column {name!r}")
+            for i, name in zip(numeric, layout.numeric, strict=True)
+        ]
+        if layout.has_pose:
+            pose_id = cells[index["pose"]].strip()
+            if not pose_id:
+                raise InputFileError(f"{where}, column 'pose': empty pose id")
+            poses.append(pose_id)
+        _check_range(parsed, layout, where)
+        kept.append(cells)
+        values.append(parsed)
+    out = io.StringIO()
+    csv.writer(out, lineterminator="\n").writerows(kept)
+    return ParsedRows(
+        np.array(values, dtype=float).reshape(-1, len(layout.numeric)),
+        poses if layout.has_pose else None,
+        kept,
+        out.getvalue().encode("utf-8"),
+    )
+
+
+@dataclass(frozen=True)
+class SampleBlock:
+    """Consecutive rows of a sample file, checked, with their orientations.
+
+    Attributes:
+        first_row: data-row number of the first row (1 = first after the header).
+        wrench_sensor: [N, N*m], sensor frame, (N, 6).
+        R_base_sensor: (N, 3, 3).
+        t: time stamps [s], (N,), or None.
+        pose: pose ids, (N,), or None.
+        text: the rows as CSV lines ending in ``\\n`` (as read, for writing them back out), or
+            None when not asked for.
+        text_ends: the position of each ``\\n`` in ``text`` (one per row unless a quoted cell
+            spans lines).
+        table: every input column as a ``pyarrow.Table`` (when the reader was asked for it).
+        byte_range: where the rows lie in the file (CSV only).
+    """
+
+    first_row: int
+    wrench_sensor: NDArray[np.float64]
+    R_base_sensor: NDArray[np.float64]
+    t: NDArray[np.float64] | None = None
+    pose: NDArray[np.str_] | None = None
+    text: bytes | None = None
+    text_ends: NDArray[np.intp] | None = None
+    table: Any = None
+    byte_range: tuple[int, int] | None = None
+
+    def __len__(self) -> int:
+        return len(self.wrench_sensor)
+
+
+class OrientationCheck:
+    """Turns each block's orientation values into ``R_base_sensor``, checking them.
+
+    A zero-norm quaternion is an error at once; quaternions off unit norm and paper angles that
+    look like radians are counted over the whole file and reported by :attr:`warnings`.
+    """
+
+    def __init__(self, layout: SampleLayout) -> None:
+        self.layout = layout
+        self._off_norm = 0
+        self._first_off: tuple[int, float] | None = None
+        self._max_abs_angle = 0.0
+
+    def rotations(self, orient: NDArray[np.float64], first_row: int) -> NDArray[np.float64]:
+        """``R_base_sensor`` (N, 3, 3) of a block's orientation values (N, k)."""
+        encoding = self.layout.encoding
+        if encoding == "quaternion":
+            norms = np.linalg.norm(orient, axis=1)
+            zero = np.flatnonzero(norms < 1e-12)
+            if zero.size:
+                raise InputFileError(
+                    f"{self.layout.source}, row {first_row + int(zero[0])}, columns "
+                    "qx,qy,qz,qw: zero-norm quaternion"
+                )
+            off = np.flatnonzero(np.abs(norms - 1.0) > _QUATERNION_NORM_TOLERANCE)
+            if off.size and self._first_off is None:
+                self._first_off = (first_row + int(off[0]), float(norms[off[0]]))
+            self._off_norm += off.size
+            rotations = Rotation.from_quat(orient)
+        elif encoding == "rotvec":
+            rotations = Rotation.from_rotvec(orient)
+        else:
+            self._max_abs_angle = max(self._max_abs_angle, float(np.abs(orient).max(initial=0.0)))
+            rotations = Rotation.from_euler("ZYX", orient, degrees=True)
+        return np.asarray(rotations.as_matrix(), dtype=float).reshape(-1, 3, 3)
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """What looked wrong but was accepted, over every block seen so far."""
+        source = self.layout.source
+        out = []
+        if self._first_off is not None:
+            row, norm = self._first_off
+            out.append(
+                f"{source}: {self._off_norm} quaternion(s) not of unit norm (row {row}: "
+                f"{norm:.4g}); normalised"
+            )
+        if 0.0 < self._max_abs_angle <= math.pi + 1e-3:  # radians, rounded
+            out.append(
+                f"{source}: every alpha_deg, beta_deg, gamma_deg is within +-pi: were the "
+                "angles given in radians? They are read as degrees"
+            )
+        return tuple(out)
