@@ -130,3 +130,27 @@ def test_calibrate_never_writes_over_its_own_input_even_with_force(
     assert main(["calibrate", str(samples), "-o", str(samples), "--force"]) == 2
     assert "is also an input of this command" in capsys.readouterr().err
     assert samples.read_bytes() == PAPER_CSV.read_bytes()
+
+
+def test_a_calibration_with_many_poses_lists_only_the_worst_in_the_terminal(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from scipy.spatial.transform import Rotation
+
+    from ftcomp.cli.calibrate import MAX_POSES_SHOWN
+    from ftcomp.io.samples_csv import write_samples
+    from ftcomp.model import GravityModel
+
+    rng = np.random.default_rng(3)
+    n = MAX_POSES_SHOWN + 10
+    rotations = Rotation.random(n, random_state=rng)
+    model = GravityModel(3.0, [0, 0, 0.05], [0.1, 0, 0], [0, 0.01, 0], tilt_U_rad=0, tilt_V_rad=0)
+    wrench = model.predict(rotations.as_matrix()) + rng.normal(scale=0.01, size=(n, 6))
+    wrench[7, 2] += 2.0  # one pose far off: it must be among those listed
+    samples = tmp_path / "s.csv"
+    write_samples(samples, wrench, rotations, encoding="quaternion", pose=np.arange(n))
+    assert main(["calibrate", str(samples), "-o", str(tmp_path / "c.json")]) == 0
+    out = capsys.readouterr().out
+    assert f"the {MAX_POSES_SHOWN} worst of {n} poses" in out
+    listed = [line.split()[1] for line in out.splitlines() if line.startswith("│ ")]
+    assert "7" in listed

@@ -7,6 +7,7 @@ import json
 import math
 import sys
 
+import numpy as np
 from rich.console import Console
 from rich.table import Table
 
@@ -130,6 +131,24 @@ def console() -> Console:
     return Console() if sys.stdout.isatty() else Console(width=120)
 
 
+#: Poses listed in the per-pose table; beyond it, the worst by residual (the file has them all).
+MAX_POSES_SHOWN = 50
+
+
+def _worst_poses(result: Calibration, n: int) -> list[int]:
+    """Indices of the poses to list: all of them up to ``n``, else the ``n`` with the largest
+    residuals (force and torque residuals each scaled by their RMS), in pose order."""
+    count = len(result.pose_ids)
+    if count <= n:
+        return list(range(count))
+    r = result.residuals
+    force_rms, torque_rms = result.residual_rms
+    score = np.linalg.norm(r[:, :3], axis=1) / max(force_rms, 1e-300) + np.linalg.norm(
+        r[:, 3:], axis=1
+    ) / max(torque_rms, 1e-300)
+    return sorted(np.argsort(score)[-n:].tolist())
+
+
 def render_calibration(result: Calibration, console: Console) -> None:
     """Print the parameters ± standard error, per-pose residuals, Table 3 and warnings."""
     m, se = result.model, result.std_errors
@@ -157,16 +176,22 @@ def render_calibration(result: Calibration, console: Console) -> None:
     )
     console.print(params)
 
-    poses = Table(title="Per-pose residuals (measured − model) and Table-3 relative errors [%]")
+    n_poses = len(result.pose_ids)
+    shown = _worst_poses(result, MAX_POSES_SHOWN)
+    title = "Per-pose residuals (measured − model) and Table-3 relative errors [%]"
+    if len(shown) < n_poses:
+        title += f": the {len(shown)} worst of {n_poses} poses (all in the calibration file)"
+    poses = Table(title=title)
     poses.add_column("pose")
     for col in WRENCH_COLUMNS:
         poses.add_column(col, justify="right")
-    for pid, res, rel in zip(
-        result.pose_ids, result.residuals, result.relative_error_percent, strict=True
-    ):
+    for k in shown:
         poses.add_row(
-            pid,
-            *(_residual_cell(r, p) for r, p in zip(res, rel, strict=True)),
+            result.pose_ids[k],
+            *(
+                _residual_cell(r, p)
+                for r, p in zip(result.residuals[k], result.relative_error_percent[k], strict=True)
+            ),
         )
     poses.add_row(
         "mean δ",
