@@ -21,8 +21,6 @@ is late too often is a fault for the caller to act on (:attr:`RateLimiter.late_i
 
 from __future__ import annotations
 
-import logging
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -31,11 +29,10 @@ from numpy.typing import NDArray
 
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.errors import HardwareError, ParameterError
+from ftcomp.hardware.pacing import RateLimiter
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 
 __all__ = ["ControlCycle", "LoopOverrunError", "LoopStats", "RateLimiter", "Reading", "run_loop"]
-
-_log = logging.getLogger(__name__)
 
 Step = Callable[["Reading"], "NDArray[np.float64] | None"]
 Sink = Callable[["Reading", "NDArray[np.float64]"], None]
@@ -43,65 +40,6 @@ Sink = Callable[["Reading", "NDArray[np.float64]"], None]
 
 class LoopOverrunError(HardwareError):
     """The loop missed its period too many times in a row (the robot has been stopped)."""
-
-
-class RateLimiter:
-    """Hold a loop to a fixed period of wall-clock time (``time.perf_counter``).
-
-    Call :meth:`sleep` once per cycle, after the cycle's work: it sleeps until the next period
-    starts and returns the slack (negative when the cycle overran). An overrun is logged with its
-    lateness (at most once a second) and counted; it never raises. After an overrun of more than
-    a whole period the schedule restarts from now instead of trying to catch up.
-
-    Args:
-        period_s: the loop period [s], > 0.
-        name: names the loop in log messages.
-        clock: the time source [s] (for tests).
-        sleep: the sleep function [s] (for tests).
-    """
-
-    def __init__(
-        self,
-        period_s: float,
-        *,
-        name: str = "loop",
-        clock: Callable[[], float] = time.perf_counter,
-        sleep: Callable[[float], None] = time.sleep,
-    ) -> None:
-        if not period_s > 0.0:
-            raise ParameterError(f"period_s must be > 0 s, got {period_s}")
-        self.period_s = period_s
-        self.name = name
-        self._clock = clock
-        self._sleep = sleep
-        self._next = clock() + period_s
-        self._last_log = -float("inf")
-        #: Slack of the last cycle [s] (negative: it overran by that much).
-        self.slack_s = 0.0
-        #: Cycles that overran since the start, and in a row up to now.
-        self.overruns = 0
-        self.late_in_a_row = 0
-        #: The most negative slack seen [s].
-        self.worst_slack_s = 0.0
-
-    def sleep(self) -> float:
-        """Wait for the next period; return the slack [s]."""
-        now = self._clock()
-        slack = self._next - now
-        self.slack_s = slack
-        if slack >= 0.0:
-            self.late_in_a_row = 0
-            self._sleep(slack)
-            self._next += self.period_s
-            return slack
-        self.overruns += 1
-        self.late_in_a_row += 1
-        self.worst_slack_s = min(self.worst_slack_s, slack)
-        if now - self._last_log >= 1.0:
-            _log.warning("%s is late by %.1f ms", self.name, -slack * 1e3)
-            self._last_log = now
-        self._next = now + self.period_s if -slack > self.period_s else self._next + self.period_s
-        return slack
 
 
 @dataclass(frozen=True, slots=True)

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import HardwareError, ParameterError
-from ftcomp.hardware.pacing import Pacer
+from ftcomp.hardware.pacing import RateLimiter
 from ftcomp.hardware.protocols import PoseSample, Robot
 from ftcomp.hardware.registry import Uri
 
@@ -51,7 +51,7 @@ class FixedRobot:
         self._p = np.array(p_base_tcp, dtype=float)
         self._R = np.array(R_base_tcp, dtype=float)
         self.pose_known = pose_known
-        self.pacer = Pacer(1.0 / rate_hz)
+        self.pacer = RateLimiter(1.0 / rate_hz, name=type(self).__name__, log_overruns=False)
 
     @property
     def control_period_s(self) -> float:
@@ -104,7 +104,7 @@ class FixedRobot:
 
     def wait_cycle(self) -> None:
         """Wait for the next period (host clock)."""
-        self.pacer.wait()
+        self.pacer.sleep()
 
     def stop(self) -> None:
         """Nothing moves."""

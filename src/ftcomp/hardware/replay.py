@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 
 from ftcomp.errors import HardwareError, InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, rotation_from_encoding
-from ftcomp.hardware.pacing import Pacer, on_host_clock
+from ftcomp.hardware.pacing import RateLimiter, on_host_clock
 from ftcomp.hardware.protocols import PoseSample, Robot, WrenchSample, WrenchSensor
 from ftcomp.hardware.registry import Uri
 
@@ -128,7 +128,7 @@ class ReplayRobot:
             )
         self.log, self.speed = log, speed
         self.clock = _Clock(int(log.t_ns[0]), speed)
-        self.pacer = Pacer(log.period_s / speed)
+        self.pacer = RateLimiter(log.period_s / speed, name=type(self).__name__, log_overruns=False)
 
     @property
     def control_period_s(self) -> float:
@@ -180,7 +180,7 @@ class ReplayRobot:
 
     def wait_cycle(self) -> None:
         """Wait for the next recorded period."""
-        self.pacer.wait()
+        self.pacer.sleep()
 
     def stop(self) -> None:
         """Nothing moves."""

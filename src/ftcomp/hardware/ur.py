@@ -42,7 +42,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
-from ftcomp.hardware.pacing import Pacer
+from ftcomp.hardware.pacing import RateLimiter
 from ftcomp.hardware.protocols import PoseSample, Robot
 from ftcomp.hardware.registry import Uri
 from ftcomp.hardware.rtde_probe import probe_rtde
@@ -110,7 +110,9 @@ class URRobot:
         self.variables: tuple[str, ...] = RECEIVE_VARIABLES
         self.receive: Any = None
         self.control: Any = None
-        self.pacer = Pacer(1.0 / frequency_hz if frequency_hz else 0.002)
+        self.pacer = RateLimiter(
+            1.0 / frequency_hz if frequency_hz else 0.002, name=type(self).__name__
+        )
         self._freshest_offset_s = -math.inf
         self._servo_target: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self._moving = False
@@ -123,7 +125,7 @@ class URRobot:
 
     @property
     def late_in_a_row(self) -> int:
-        """Control periods missed in a row up to now (see :class:`.pacing.Pacer`)."""
+        """Control periods missed in a row up to now (see :class:`.pacing.RateLimiter`)."""
         return self.pacer.late_in_a_row
 
     def __enter__(self) -> URRobot:
@@ -138,7 +140,7 @@ class URRobot:
         )
         major, minor = self.version[0], self.version[1]
         frequency = self._frequency_hz or (500.0 if major > 3 else 125.0)
-        self.pacer = Pacer(1.0 / frequency)
+        self.pacer = RateLimiter(1.0 / frequency, name=type(self).__name__, log_overruns=False)
         raw = major > 5 or (major == 5 and minor >= 9)
         self.variables = RECEIVE_VARIABLES + (("ft_raw_wrench",) if raw else ())
         try:
@@ -291,7 +293,7 @@ class URRobot:
                 raise HardwareError(
                     f"{self.uri.text!r}: the arm did not come to rest within {max_duration_s:g} s"
                 )
-            self.pacer.wait()
+            self.pacer.sleep()
 
     def command_twist(self, twist_base: NDArray[np.float64]) -> None:
         """Send the TCP twist (base frame) by speedL, or by servoL to the integrated pose.
@@ -320,7 +322,7 @@ class URRobot:
 
     def wait_cycle(self) -> None:
         """Wait for the next control period (host clock)."""
-        self.pacer.wait()
+        self.pacer.sleep()
 
     def stop(self) -> None:
         """Decelerate to rest at once (speedStop, or servoStop in servo mode)."""
