@@ -62,6 +62,8 @@ def test_report_references_only_existing_non_empty_local_images(demo_dir: Path) 
         "fig7_compensation.png",
         "fig7_k13_sweep.png",
         "fig7_k23_sweep.png",
+        "beyond_online_load.png",
+        "beyond_fast_move.png",
     }
     assert not parser.external
     for src in parser.sources:
@@ -207,7 +209,7 @@ def test_the_report_renders_in_a_browser_without_overflow_at_1280_and_800_px(
         pytest.skip("chromium not installed (Debian: apt-get install chromium); CI installs it")
     pages = measure_page(demo_dir / "report.html", [1280, 800])
     for width, page in pages.items():
-        assert len(page["images"]) == 7
+        assert len(page["images"]) == 9
         broken = [i["src"] for i in page["images"] if not i["loaded"] or i["naturalWidth"] <= 0]
         assert not broken, f"{width} px: images that did not load: {broken}"
         assert page["viewport"] == width

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,10 +20,15 @@ from numpy.typing import NDArray
 from ftcomp.arrays import freeze_field
 from ftcomp.calibration.loo import leave_one_out as _leave_one_out
 from ftcomp.calibration.methods import CONDITION_SINGULAR, Method, fit_method, force_regressor
+from ftcomp.calibration.outliers import check_fit, check_readings, outlier_warning
 from ftcomp.errors import IdentificationError, ParameterError
 from ftcomp.frames import tilt_from_gravity_in_base
 from ftcomp.model import GravityModel
 from ftcomp.samples import Samples
+
+if TYPE_CHECKING:  # only annotations: drift and mount build on this module
+    from ftcomp.calibration.drift import BiasDrift
+    from ftcomp.calibration.mount import MountRotation
 
 __all__ = [
     "CONDITION_WARNING",
@@ -79,6 +85,9 @@ class Calibration:
             could not identify the model), shape (P, 6).
         condition_number: of the force regressor (Eq. 7); large means poses too alike.
         warnings: human-readable warnings.
+        bias_drift: the bias as a function of time (``--bias-drift``), or None: constant.
+        mount: the sensor frame's rotation in the frame the orientations were recorded in
+            (``--identify-mount``), or None: the orientations are the sensor's.
     """
 
     model: GravityModel
@@ -93,6 +102,8 @@ class Calibration:
     loo_error: NDArray[np.float64] = field(repr=False)
     condition_number: float = math.inf
     warnings: tuple[str, ...] = ()
+    bias_drift: BiasDrift | None = None
+    mount: MountRotation | None = None
 
     def __post_init__(self) -> None:
         n = len(self.pose_ids)
@@ -284,13 +295,16 @@ def calibrate(
 
     Raises:
         IdentificationError: fewer than 3 distinct poses, or poses that cannot separate bias
-            from gravity.
+            from gravity; a reading or a fit that is not finite or absurd
+            (:mod:`ftcomp.calibration.outliers`, which also names outlier poses in ``warnings``).
     """
     if method not in ("paper", "joint"):
         raise ParameterError(f"method must be 'paper' or 'joint', got {method!r}")
+    check_readings(samples.wrench_sensor, samples.source, samples.pose)
     ids, R, wrench, count, var_mean = pose_means(samples)
     cond = _check_identifiable(R, samples.source)
     fit, sigma = fit_method(method, wrench, R, var_mean, count)
+    check_fit(fit.theta, fit.covariance, samples.source)
     model = _model(fit.theta)
     gvu = _propagate(
         lambda th: np.array(tilt_from_gravity_in_base(th[0:3])), fit.theta, fit.covariance
@@ -315,6 +329,7 @@ def calibrate(
         loo = _leave_one_out(method, wrench, R, var_mean, count, fit, sigma)
 
     warnings = list(samples.warnings)
+    warnings.extend(w for w in [outlier_warning(ids, R, wrench)] if w is not None)
     if cond > CONDITION_WARNING:
         warnings.append(
             f"the poses are too alike to separate bias from gravity well (regressor condition "

@@ -42,6 +42,15 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "stream": ("ftcomp.cli.stream", "log a sensor's readings, raw and compensated, at its rate"),
     "run": ("ftcomp.cli.run", "run the compliant loop on a robot with a calibration"),
+    "rebias": (
+        "ftcomp.cli.rebias",
+        "re-estimate only the sensor bias from still readings, the tool model kept",
+    ),
+    "poses": ("ftcomp.cli.poses", "design calibration poses (D-optimal, reachable, short travel)"),
+    "calibrate-dynamic": (
+        "ftcomp.cli.calibrate_dynamic",
+        "identify the tool's inertia tensor from a recorded fast excitation trajectory",
+    ),
 }
 #: ``ftcomp sim`` commands: name -> (module, one-line help).
 SIM_COMMANDS: dict[str, tuple[str, str]] = {

@@ -13,6 +13,7 @@ from rich.table import Table
 
 from ftcomp.calibration.identify import Calibration, calibrate
 from ftcomp.cli.common import parse_range, print_warnings
+from ftcomp.errors import ParameterError
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.calibration_json import calibration_to_dict, save_calibration
 from ftcomp.io.samples_csv import read_samples
@@ -51,6 +52,21 @@ def register(parser: argparse.ArgumentParser) -> None:
         "(docs/calibration.md; default: joint)",
     )
     parser.add_argument(
+        "--bias-drift",
+        choices=("none", "linear", "quadratic"),
+        default="none",
+        help="fit the force and torque bias as a polynomial in each reading's time t, with the "
+        "tool model shared; needs a t column (joint method; default: none, a constant bias)",
+    )
+    parser.add_argument(
+        "--identify-mount",
+        choices=("yaw", "full"),
+        default=None,
+        help="the orientations are the flange's or TCP's: identify the sensor frame's rotation "
+        "in that frame too (yaw about its z axis, 4+ poses; or all three angles, 6+ poses; "
+        "joint method; default: the orientations are the sensor's)",
+    )
+    parser.add_argument(
         "--range",
         metavar="FORCE_N,TORQUE_NM",
         type=parse_range,
@@ -77,7 +93,17 @@ def run(args: argparse.Namespace) -> int:
     force_range, torque_range = args.range if args.range else (None, None)
     samples = read_samples(args.samples, force_range_N=force_range, torque_range_Nm=torque_range)
     print_warnings(samples.warnings)
-    result = calibrate(samples, method=args.method)
+    extended = args.bias_drift != "none" or args.identify_mount is not None
+    if extended and args.method != "joint":
+        raise ParameterError("--bias-drift and --identify-mount need --method joint")
+    if extended:
+        from ftcomp.calibration.drift import calibrate_extended
+
+        result = calibrate_extended(
+            samples, bias_drift=args.bias_drift, identify_mount=args.identify_mount
+        )
+    else:
+        result = calibrate(samples, method=args.method)
     if output is not None:
         save_calibration(output, result)
     if args.json:
@@ -113,6 +139,39 @@ def tilt_not_identified(result: Calibration) -> str | None:
         f"tilt not identified: {', '.join(hidden)} (its standard error); these poses and "
         "readings cannot tell the tilt from a level base"
     )
+
+
+def _render_extensions(result: Calibration, console: Console) -> None:
+    """The bias drift's rates and the mount's angles, each ± its standard error."""
+    drift, mount = result.bias_drift, result.mount
+    if drift is not None:
+        table = Table(
+            title=f"Bias drift ({drift.name}, t = {drift.t_min_s:.6g} .. {drift.t_max_s:.6g} s; "
+            f"F0, M0 above are the bias at t = {drift.t_ref_s:.6g} s)"
+        )
+        table.add_column("coefficient")
+        for col in WRENCH_COLUMNS:
+            table.add_column(col, justify="right")
+        for k in range(drift.order):
+            unit = "per min" if k == 0 else "per min²"
+            scale = 60.0 ** (k + 1)
+            table.add_row(
+                f"rate {unit}" if k == 0 else f"curvature {unit}",
+                *(
+                    _pm(v, e, scale, 4 if j < 3 else 5)
+                    for j, (v, e) in enumerate(
+                        zip(drift.coefficients[k], drift.std_errors[k], strict=True)
+                    )
+                ),
+            )
+        console.print(table)
+    if mount is not None:
+        angles = ", ".join(
+            _pm(v, e, math.degrees(1), 3)
+            for v, e in zip(mount.angles_rad, mount.std_errors_rad, strict=True)
+        )
+        what = "yaw about the recorded frame's z" if mount.axes == "yaw" else "rotation vector"
+        console.print(f"sensor mount ({what}): {angles} deg")
 
 
 def _pm(value: float, se: float, scale: float = 1.0, digits: int = 4) -> str:
@@ -175,6 +234,7 @@ def render_calibration(result: Calibration, console: Console) -> None:
         "mm",
     )
     console.print(params)
+    _render_extensions(result, console)
 
     n_poses = len(result.pose_ids)
     shown = _worst_poses(result, MAX_POSES_SHOWN)

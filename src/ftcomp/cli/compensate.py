@@ -95,6 +95,8 @@ class _Summary:
     weight_sum: float = 0.0
     weight_max: float = -np.inf
     contact_sum: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    t_min: float = np.inf
+    t_max: float = -np.inf
 
     def add(self, contact: NDArray[np.float64], weight: NDArray[np.float64]) -> None:
         self.rows += len(weight)
@@ -108,7 +110,11 @@ def _extra(
 ) -> NDArray[np.float64]:
     """The block's contact wrench and load weight, shape (N, 7)."""
     extra = np.empty((len(block), 7))
-    contact = compensator.compensate(block.wrench_sensor, block.R_base_sensor)
+    t_s = block.t if compensator.bias_drift is not None else None
+    if t_s is not None and len(t_s):
+        summary.t_min = min(summary.t_min, float(t_s.min()))
+        summary.t_max = max(summary.t_max, float(t_s.max()))
+    contact = compensator.compensate(block.wrench_sensor, block.R_base_sensor, t_s=t_s)
     extra[:, :6] = contact
     np.sqrt(np.einsum("ij,ij->i", contact[:, :3], contact[:, :3]), out=extra[:, 6])
     summary.add(contact, extra[:, 6])
@@ -242,8 +248,22 @@ def run(args: argparse.Namespace) -> int:
             raise ParameterError(
                 f"{reader.source}: already has column {clash[0]!r}; compensate raw readings only"
             )
+        drift = calibration.bias_drift
+        if drift is not None and not reader.layout.has_t:
+            raise ParameterError(
+                f"{reader.source}: the calibration has a {drift.name} bias drift, applied from "
+                "each row's time: the file has no 't' (or 't_ns') column"
+            )
         summary = _stream(reader, GravityCompensator(calibration), output, to_parquet)
     print_warnings(reader.warnings)
+    if drift is not None and (summary.t_min < drift.t_min_s or summary.t_max > drift.t_max_s):
+        print_warnings(
+            [
+                f"rows at t = {summary.t_min:.6g} .. {summary.t_max:.6g} s lie outside the "
+                f"calibrated time range {drift.t_min_s:.6g} .. {drift.t_max_s:.6g} s: the "
+                f"{drift.name} bias drift is extrapolated there (re-bias with ftcomp rebias)"
+            ]
+        )
     if args.json:
         result = {
             "output": str(output),

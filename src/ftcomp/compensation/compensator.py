@@ -24,15 +24,26 @@ class GravityCompensator:
     Args:
         calibration: a :class:`~ftcomp.calibration.Calibration` (e.g. from
             :func:`ftcomp.load_calibration`) or a bare :class:`~ftcomp.model.GravityModel`.
+
+    A calibration with a mount (``--identify-mount``) takes the orientations of the frame it
+    was recorded in (flange, TCP) and turns them into the sensor's at no extra cost (folded into
+    the constant matrices). One with a bias drift applies it when given each sample's time
+    (``t_s``); without times the bias is the model's, the bias at the end of the calibration.
     """
 
     def __init__(self, calibration: Calibration | GravityModel) -> None:
         model = calibration.model if isinstance(calibration, Calibration) else calibration
         self.model = model
+        mount = calibration.mount if isinstance(calibration, Calibration) else None
+        #: The calibration's bias drift (None: constant bias).
+        self.bias_drift = calibration.bias_drift if isinstance(calibration, Calibration) else None
         self._gravity_base = model.gravity_base_N.copy()
         self._bias = np.concatenate([model.force_bias_N, model.torque_bias_Nm])
-        # [F; M] of the tool gravity = A @ g_s with A = [I; skew(P)] (Eq. 12, 20).
+        # [F; M] of the tool gravity = A @ g_s with A = [I; skew(P)] (Eq. 12, 20); with a mount,
+        # g_s = R_rec_sensor.T @ g_rec, so A @ R_rec_sensor.T acts on the recorded frame's.
         self._A = np.vstack([np.eye(3), skew(model.center_of_gravity_m)])
+        if mount is not None:
+            self._A = self._A @ mount.R_rec_sensor.T
         # For a batch, fold R.T @ g and A into one (9, 6) matrix acting on R flattened row-major:
         # g_s[j] = sum_i g[i] R[i, j], so R.reshape(N, 9) @ K gives every g_s, K[3i+j, j] = g[i].
         K = np.zeros((9, 3))
@@ -50,6 +61,7 @@ class GravityCompensator:
         R_base_sensor: ArrayLike,
         *,
         out: NDArray[np.float64] | None = None,
+        t_s: ArrayLike | None = None,
     ) -> NDArray[np.float64]:
         """Contact wrench ``[F'; M']`` (Eq. 22) [N, N*m], sensor frame.
 
@@ -58,6 +70,8 @@ class GravityCompensator:
             R_base_sensor: the sensor's orientation(s) in the base frame, (3, 3) or (N, 3, 3).
             out: for a batch, an optional C-contiguous float64 (N, 6) array to write into
                 (saves allocating a fresh result when streaming blocks of readings).
+            t_s: each sample's time [s], scalar or (N,): applies the calibration's bias drift
+                (ignored without one).
 
         Returns:
             Shape (6,) or (N, 6).
@@ -65,6 +79,8 @@ class GravityCompensator:
         w = np.asarray(wrench_sensor, dtype=float)
         R = np.asarray(R_base_sensor, dtype=float)
         if w.shape == (6,) and R.shape == (3, 3):
+            if t_s is not None and self.bias_drift is not None:
+                w = w - self.bias_drift.offset(t_s)
             return w - self._bias - self._A @ (self._gravity_base @ R)
         if w.ndim == 2 and w.shape[1] == 6 and R.shape == (len(w), 3, 3):
             if out is None:
@@ -75,6 +91,8 @@ class GravityCompensator:
             np.dot(np.ascontiguousarray(R).reshape(len(R), 9), self._batch_matrix, out=out)
             np.subtract(w, out, out=out)
             out -= self._bias
+            if t_s is not None and self.bias_drift is not None:
+                out -= self.bias_drift.offset(np.broadcast_to(np.asarray(t_s, float), len(w)))
             return out
         raise ParameterError(
             "compensate needs wrench_sensor (6,) with R_base_sensor (3, 3), or (N, 6) with "

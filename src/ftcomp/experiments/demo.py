@@ -24,6 +24,7 @@ import numpy as np
 from ftcomp import paper
 from ftcomp.errors import ParameterError
 from ftcomp.experiments.comparisons import Comparison, compare_with_paper, comparison_rows
+from ftcomp.experiments.demo_beyond import beyond_section
 from ftcomp.experiments.demo_calibration import calibration_section
 from ftcomp.experiments.demo_gravity import continuous_section, tables_section
 from ftcomp.experiments.demo_placement import placement_section
@@ -49,6 +50,7 @@ class DemoSettings:
         k13_values_mm_per_N: the K1 sweep on the sponge, K2 fixed at the sponge's default.
         k23_values_mm_per_s_N: the K2 sweep on the sponge, K1 fixed at the paper's 0.1 mm/N.
         seed: seeds every sensor's noise.
+        beyond_no_grasp_s: motion without grasping in the "beyond the paper" section [s].
     """
 
     samples_per_pose: int
@@ -57,6 +59,7 @@ class DemoSettings:
     k13_values_mm_per_N: tuple[float, ...]
     k23_values_mm_per_s_N: tuple[float, ...]
     seed: int
+    beyond_no_grasp_s: float = 60.0
 
     @classmethod
     def full(cls, seed: int) -> DemoSettings:
@@ -66,13 +69,13 @@ class DemoSettings:
     @classmethod
     def quick(cls, seed: int) -> DemoSettings:
         """A shorter run with the same sections (for tests)."""
-        return cls(60, 30, 1.5, (0.05, 0.2), (1.0, 2.0), seed)
+        return cls(60, 30, 1.5, (0.05, 0.2), (1.0, 2.0), seed, beyond_no_grasp_s=9.0)
 
     @property
     def steps(self) -> int:
         """Progress steps: 2 calibrations, 2 continuous-pose steps, 6 loads, placement runs."""
         placement = 5 + len(self.k13_values_mm_per_N) + len(self.k23_values_mm_per_s_N)
-        return 2 + 2 + 6 + placement
+        return 2 + 2 + 6 + placement + 3  # + 3: beyond the paper
 
 
 def comparison_table(comparisons: Sequence[Comparison], caption: str) -> Table:
@@ -141,6 +144,9 @@ def run_demo(
     t0 = time.perf_counter()
     place_metrics, place_section = placement_section(out, settings, joint, advance)
     timing["placement_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    beyond_metrics, beyond_sec = beyond_section(out, settings, advance)
+    timing["beyond_paper_s"] = time.perf_counter() - t0
     timing["total_s"] = time.perf_counter() - started
 
     metrics: dict[str, Any] = {
@@ -149,6 +155,7 @@ def run_demo(
         "table3": table3,
         "table4": table4,
         "placement": place_metrics,
+        "beyond_paper": beyond_metrics,
         "settings": {
             "samples_per_pose": settings.samples_per_pose,
             "weighing_samples_per_pose": settings.weighing_samples_per_pose,
@@ -172,7 +179,7 @@ def run_demo(
         ],
         tables=[comparison_table(comparisons, "The paper's results and ours")],
     )
-    sections = [calib_section, cont_section, tables_sec, place_section]
+    sections = [calib_section, cont_section, tables_sec, place_section, beyond_sec]
     write_report(
         out / "report.html",
         "ftcomp: Huang et al. 2020 reproduced on a simulated robot cell",

@@ -6,7 +6,9 @@ Keys (SI units, sensor frame unless stated): ``format``, ``method``, ``tool_weig
 keys), ``residual_rms`` {``force_N``, ``torque_Nm``}, ``relative_error_percent`` {``per_pose``
 [[6]...], ``mean`` [6]}, ``poses``, and diagnostics (``condition_number``, ``pose_ids``,
 ``per_pose_residuals``, ``leave_one_out``, ``warnings``). Unmeasurable values (a relative error
-where the reading is zero) are ``null``.
+where the reading is zero) are ``null``. Optional, when identified: ``bias_drift`` (model,
+``t_ref_s``, ``t_range_s``, coefficients per power of seconds with standard errors) and
+``mount`` (``axes``, ``angles_deg``, ``std_errors_deg``); files without them load as before.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,6 +27,10 @@ from ftcomp.calibration.identify import Calibration, StandardErrors
 from ftcomp.errors import CalibrationFileError
 from ftcomp.io.atomic import atomic_write_text
 from ftcomp.model import GravityModel
+
+if TYPE_CHECKING:
+    from ftcomp.calibration.drift import BiasDrift
+    from ftcomp.calibration.mount import MountRotation
 
 __all__ = [
     "FORMAT",
@@ -109,6 +115,8 @@ def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
             },
         },
         "warnings": list(calibration.warnings),
+        **({"bias_drift": calibration.bias_drift.to_dict()} if calibration.bias_drift else {}),
+        **({"mount": calibration.mount.to_dict()} if calibration.mount else {}),
     }
 
 
@@ -234,9 +242,19 @@ def model_from_dict(data: dict[str, Any], source: str = "<dict>") -> GravityMode
 def _optional_array(data: Any, shape: tuple[int, ...]) -> NDArray[np.float64]:
     try:
         arr = np.array(data, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an int beyond float range
         return np.full(shape, np.nan)
     return arr if arr.shape == shape else np.full(shape, np.nan)
+
+
+def _finite_float(value: Any) -> float:
+    """A diagnostic number, or NaN when absent, not a number or beyond float range."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return math.nan
+    try:
+        return float(value)
+    except OverflowError:
+        return math.nan
 
 
 def _object(value: Any) -> dict[str, Any]:
@@ -299,16 +317,13 @@ def load_calibration(path: str | os.PathLike[str]) -> Calibration:
     se_data = _object(data.get("std_errors"))
     se_tilt = _object(se_data.get("base_tilt_deg"))
 
-    def se_scalar(value: Any) -> float:
-        return float(value) if isinstance(value, (int, float)) else math.nan
-
     std_errors = StandardErrors(
-        weight_N=se_scalar(se_data.get("tool_weight_N")),
+        weight_N=_finite_float(se_data.get("tool_weight_N")),
         center_of_gravity_m=_optional_array(se_data.get("center_of_gravity_m"), (3,)),
         force_bias_N=_optional_array(se_data.get("force_bias_N"), (3,)),
         torque_bias_Nm=_optional_array(se_data.get("torque_bias_Nm"), (3,)),
-        tilt_U_rad=math.radians(se_scalar(se_tilt.get("U"))),
-        tilt_V_rad=math.radians(se_scalar(se_tilt.get("V"))),
+        tilt_U_rad=math.radians(_finite_float(se_tilt.get("U"))),
+        tilt_V_rad=math.radians(_finite_float(se_tilt.get("V"))),
         gravity_base_N=_optional_array(se_data.get("gravity_in_base_N"), (3,)),
     )
     ids = _list(data.get("pose_ids"))
@@ -328,6 +343,44 @@ def load_calibration(path: str | os.PathLike[str]) -> Calibration:
         residuals=_optional_array(data.get("per_pose_residuals"), (n, 6)),
         relative_error_percent=_optional_array(per_pose, (n, 6)),
         loo_error=_optional_array(loo.get("per_pose") if isinstance(loo, dict) else None, (n, 6)),
-        condition_number=float(cond) if isinstance(cond, (int, float)) else math.nan,
+        condition_number=_finite_float(cond),
         warnings=tuple(w for w in _list(data.get("warnings")) if isinstance(w, str)),
+        bias_drift=_drift(data.get("bias_drift"), source),
+        mount=_mount(data.get("mount"), source),
     )
+
+
+def _drift(data: Any, source: str) -> BiasDrift | None:
+    """The optional ``bias_drift`` entry (absent or null: a constant bias)."""
+    from ftcomp.calibration.drift import DRIFT_ORDERS, BiasDrift
+
+    if data is None:
+        return None
+    order = DRIFT_ORDERS.get(str(data.get("model"))) if isinstance(data, dict) else None
+    if not isinstance(data, dict) or not order:
+        raise CalibrationFileError(f"{source}: 'bias_drift.model' must be linear or quadratic")
+    span = data.get("t_range_s")
+    coefficients = _optional_array(data.get("coefficients_per_s_power"), (order, 6))
+    if not isinstance(span, list) or len(span) != 2 or not np.all(np.isfinite(coefficients)):
+        raise CalibrationFileError(
+            f"{source}: 'bias_drift' needs t_range_s [2] and coefficients_per_s_power "
+            f"[{order}][6], finite"
+        )
+    t_min = _number({"t": span[0]}, "t", f"{source}: bias_drift.t_range_s")
+    t_max = _number({"t": span[1]}, "t", f"{source}: bias_drift.t_range_s")
+    t_ref = _number(data, "t_ref_s", f"{source}: bias_drift")
+    return BiasDrift(
+        order,
+        t_ref,
+        t_min,
+        t_max,
+        coefficients,
+        _optional_array(data.get("std_errors"), (order, 6)),
+    )
+
+
+def _mount(data: Any, source: str) -> MountRotation | None:
+    """The optional ``mount`` entry (absent or null: the orientations are the sensor's)."""
+    from ftcomp.calibration.mount import MountRotation
+
+    return None if data is None else MountRotation.from_dict(data, source)

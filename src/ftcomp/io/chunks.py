@@ -15,9 +15,9 @@ import csv
 import io
 import os
 import re
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import BinaryIO, overload
+from typing import Any, BinaryIO, NoReturn, overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,8 +26,11 @@ from ftcomp.errors import InputFileError
 
 __all__ = [
     "DEFAULT_CHUNK_BYTES",
+    "MAX_HEADER_BYTES",
+    "MAX_LINE_BYTES",
     "CsvRows",
     "LineChunk",
+    "csv_rows",
     "drop_blank_lines",
     "iter_line_chunks",
     "line_ends",
@@ -38,6 +41,13 @@ __all__ = [
 #: Bytes read at a time: large enough to amortise per-chunk work, small enough to keep a
 #: chunk's parsed arrays well under 100 MB.
 DEFAULT_CHUNK_BYTES = 8 << 20
+
+#: The longest line read [bytes]; a longer one (or endless input without a line end, such as
+#: ``/dev/zero``) is an error, so memory stays bounded. It also keeps every cell within the
+#: :mod:`csv` module's field limit (131,072 characters).
+MAX_LINE_BYTES = 128 << 10
+#: The longest header line read [bytes]: room for about 100,000 short column names.
+MAX_HEADER_BYTES = 1 << 20
 
 _BOM = b"\xef\xbb\xbf"
 _BLANK_LINES = re.compile(rb"\n\n+")
@@ -100,6 +110,7 @@ def iter_line_chunks(
     *,
     chunk_bytes: int = DEFAULT_CHUNK_BYTES,
     first_line: int = 1,
+    max_line_bytes: int = MAX_LINE_BYTES,
 ) -> Iterator[LineChunk]:
     """Chunks of whole lines from ``handle``'s current position to the end.
 
@@ -107,7 +118,7 @@ def iter_line_chunks(
     is even), so a CSV record is never split. A leading UTF-8 byte-order mark is dropped.
 
     Raises:
-        InputFileError: the text is not UTF-8.
+        InputFileError: the text is not UTF-8, or a line is longer than ``max_line_bytes``.
     """
     position = handle.tell()
     pending = b""
@@ -121,6 +132,8 @@ def iter_line_chunks(
         at_start = False
         cut = _cut(data) if block else len(data)
         if not cut and block:
+            if len(data) > max_line_bytes:
+                _too_long(source, line, max_line_bytes)
             pending = data  # no complete record yet: read on
             continue
         text = _normalise(data[:cut], source)
@@ -128,12 +141,24 @@ def iter_line_chunks(
             text += b"\n"
         if text:
             ends = line_ends(text)
+            lengths = np.diff(ends, prepend=-1)
+            if lengths.max() > max_line_bytes + 1:
+                _too_long(
+                    source, line + int(np.argmax(lengths > max_line_bytes + 1)), max_line_bytes
+                )
             yield LineChunk(text, ends, line, position, position + cut)
             line += len(ends)
         position += cut
         pending = data[cut:]
         if not block:
             return
+
+
+def _too_long(source: str, line: int, limit: int) -> NoReturn:
+    raise InputFileError(
+        f"{source}, line {line}: longer than {limit} bytes, the limit of a line (a sample "
+        "row is a few hundred bytes): not a sample file"
+    )
 
 
 def _cut(data: bytes) -> int:
@@ -154,11 +179,16 @@ def read_first_line(handle: BinaryIO, source: str) -> str:
     Leaves ``handle`` at the start of the second line.
 
     Raises:
-        InputFileError: the line is not UTF-8.
+        InputFileError: the line is not UTF-8, or longer than :data:`MAX_HEADER_BYTES`.
     """
     start = handle.tell()
-    raw = handle.readline()
+    raw = handle.readline(MAX_HEADER_BYTES + 2)
     cr = raw.find(b"\r")
+    if (cr if cr >= 0 else len(raw.rstrip(b"\n"))) > MAX_HEADER_BYTES:
+        raise InputFileError(
+            f"{source}, header (line 1): longer than {MAX_HEADER_BYTES} bytes (no line end): "
+            "not a sample file"
+        )
     if cr >= 0 and raw[cr + 1 : cr + 2] != b"\n":  # lines end in a lone CR (old Mac files)
         handle.seek(start + cr + 1)
     raw = raw[:cr] if cr >= 0 else raw.rstrip(b"\n")
@@ -219,9 +249,10 @@ class CsvRows(Sequence[tuple[str, ...]]):
             handle.seek(start)
             data = handle.read(stop - start)
         text = data.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")
+        where = f"{self._path}, bytes {start}-{stop}"
         rows = [
             tuple(cells)
-            for cells in csv.reader(io.StringIO(text))
+            for cells in csv_rows(csv.reader(io.StringIO(text)), lambda: where, 1)
             if cells and any(c.strip() for c in cells)
         ]
         self._cached = (k, rows)
@@ -247,3 +278,18 @@ class CsvRows(Sequence[tuple[str, ...]]):
             raise IndexError(f"row index {i} out of range ({self._len} rows)")
         k = bisect.bisect_right(self._firsts, i) - 1
         return self._span_rows(k)[i - self._spans[k][2]]
+
+
+def csv_rows(reader: Any, where: Callable[[], str], first_line: int) -> Iterator[list[str]]:
+    """The rows of a :func:`csv.reader` over text whose first line is ``first_line``; a
+    :class:`csv.Error` (a cell beyond the field limit, a NUL byte) becomes an
+    :class:`InputFileError` naming ``where()`` (the row) and the line."""
+    while True:
+        try:
+            cells = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            line = first_line - 1 + reader.line_num
+            raise InputFileError(f"{where()} (line {line}): not a CSV row ({exc})") from None
+        yield cells

@@ -13,6 +13,10 @@ rules here, to name its row and column: a message costs nothing until a cell is 
 (``12``, ``-0.5``, ``.5``, ``3.``, ``1e-3``), with spaces around allowed. Python's ``float``
 accepts more (``3_3445`` as 33445, ``١٢``, ``infinity``); those are errors here, and ``nan`` and
 ``inf`` are read only to be rejected as not finite.
+
+**Limits.** A force beyond 1e6 N or a torque beyond 1e5 N*m is no sensor's reading (an error
+without a sensor range too; :mod:`ftcomp.calibration.outliers`). Lines are bounded
+(:mod:`ftcomp.io.chunks`); the header must be the first line (a blank first line is an error).
 """
 
 from __future__ import annotations
@@ -22,6 +26,8 @@ import difflib
 import io
 import math
 import re
+import sys
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -30,11 +36,14 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from ftcomp.calibration.outliers import PLAUSIBLE_FORCE_N, PLAUSIBLE_TORQUE_NM
 from ftcomp.errors import InputFileError
 from ftcomp.frames import ENCODING_COLUMNS, OrientationEncoding
+from ftcomp.io.chunks import csv_rows
 from ftcomp.samples import WRENCH_COLUMNS
 
 __all__ = [
+    "MAX_ORIENTATION_VALUE",
     "OrientationCheck",
     "ParsedRows",
     "SampleBlock",
@@ -47,7 +56,10 @@ __all__ = [
 ]
 
 _OTHER_DELIMITERS = (";", "\t", "|")
+_SUGGEST_MAX_COLUMNS = 1000  # beyond, no spelling suggestions (difflib is slow on wide headers)
 _QUATERNION_NORM_TOLERANCE = 0.01
+#: An orientation value (quaternion component, rad or deg) beyond +-this is none.
+MAX_ORIENTATION_VALUE = 1e6
 #: A number as the sample files write it (see the module docstring); nan/inf only to reject.
 _NUMBER = re.compile(
     r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf|infinity|nan)",
@@ -56,6 +68,8 @@ _NUMBER = re.compile(
 
 
 def _suggest(name: str, header: Sequence[str]) -> str:
+    if len(header) > _SUGGEST_MAX_COLUMNS:
+        return ""
     lowered = {h.lower(): h for h in header}
     if name in lowered and lowered[name] != name:
         return f" (found {lowered[name]!r}: column names are case-sensitive)"
@@ -109,9 +123,13 @@ class SampleLayout:
     force_range_N: float | None = None
     torque_range_Nm: float | None = None
     index: dict[str, int] = field(init=False, repr=False, compare=False)
+    limits: list[tuple[float, str, str]] = field(init=False, repr=False, compare=False)
+    bounds: NDArray[np.float64] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "index", {name: i for i, name in enumerate(self.header)})
+        object.__setattr__(self, "limits", _limits(self))
+        object.__setattr__(self, "bounds", np.array([limit for limit, _, _ in self.limits]))
 
     @property
     def has_pose(self) -> bool:
@@ -145,7 +163,7 @@ def check_header(
                     f"{where}: one column {names[0][:40]!r}; the delimiter must be ',' "
                     f"(found {delim!r})"
                 )
-    duplicates = sorted({name for name in names if names.count(name) > 1 and name})
+    duplicates = sorted(name for name, n in Counter(names).items() if n > 1 and name)
     if duplicates:
         raise InputFileError(f"{where}: column {duplicates[0]!r} appears more than once")
     for name in WRENCH_COLUMNS:
@@ -171,50 +189,45 @@ def parse_number(cell: str, where: str) -> float:
     return value
 
 
+def _limits(layout: SampleLayout) -> list[tuple[float, str, str]]:
+    """(bound, unit, what) of each numeric column: the sensor range or the plausible bound
+    (wrench), :data:`MAX_ORIENTATION_VALUE`, none for ``t`` (the largest float)."""
+    force = (layout.force_range_N, PLAUSIBLE_FORCE_N, " N")
+    torque = (layout.torque_range_Nm, PLAUSIBLE_TORQUE_NM, " N*m")
+    out = [
+        (bound, unit, "any plausible F/T reading")
+        if given is None
+        else (given, unit, "the sensor range")
+        for given, bound, unit in [force] * 3 + [torque] * 3
+    ]
+    out += [(MAX_ORIENTATION_VALUE, "", "any orientation value")] * len(layout.numeric[6:])
+    return out[: len(layout.numeric) - layout.has_t] + [(sys.float_info.max, "", "")] * layout.has_t
+
+
 def _check_range(values: Sequence[float], layout: SampleLayout, where: str) -> None:
-    for first, limit, unit, prefix in (
-        (0, layout.force_range_N, "N", "f"),
-        (3, layout.torque_range_Nm, "N*m", "t"),
-    ):
-        if limit is None:
-            continue
-        for axis, value in zip("xyz", values[first : first + 3], strict=True):
-            if abs(value) > limit:
-                raise InputFileError(
-                    f"{where}, column '{prefix}{axis}': {value:g} {unit} is beyond the sensor "
-                    f"range +-{limit:g} {unit}"
-                )
+    for name, value, (limit, unit, what) in zip(layout.numeric, values, layout.limits, strict=True):
+        if abs(value) > limit:
+            raise InputFileError(
+                f"{where}, column {name!r}: {value:g}{unit} is beyond {what} +-{limit:g}{unit}"
+            )
 
 
 def check_values(values: NDArray[np.float64], layout: SampleLayout) -> bool:
     """Whether a block of ``values`` (N, len(layout.numeric)) passes every value check at once:
-    all finite and within the sensor range. When it does not, the reader names the first bad
-    cell with :func:`parse_rows` (CSV, with line numbers) or :func:`first_bad_value`."""
-    if not np.isfinite(values).all():
-        return False
-    for first, limit in ((0, layout.force_range_N), (3, layout.torque_range_Nm)):
-        if limit is not None and np.abs(values[:, first : first + 3]).max(initial=0.0) > limit:
-            return False
-    return True
+    all finite and within the limits. When it does not, the reader names the first bad cell
+    with :func:`parse_rows` (CSV, with line numbers) or :func:`first_bad_value`."""
+    return bool((np.abs(values) <= layout.bounds).all())
 
 
 def first_bad_value(values: NDArray[np.float64], layout: SampleLayout, first_row: int) -> None:
     """Raise for the first row of ``values`` (row-major, then column order) that fails
     :func:`check_values` (for files without line numbers, e.g. Parquet)."""
-    for i in np.flatnonzero(~np.isfinite(values).all(axis=1) | _beyond(values, layout)):
+    for i in np.flatnonzero(~(np.abs(values) <= layout.bounds).all(axis=1)):
         where = f"{layout.source}, row {first_row + int(i)}"
         for name, value in zip(layout.numeric, values[i].tolist(), strict=True):
             if not math.isfinite(value):
                 raise InputFileError(f"{where}, column {name!r}: {value} is not finite")
         _check_range(values[i].tolist(), layout, where)
-
-
-def _beyond(values: NDArray[np.float64], layout: SampleLayout) -> NDArray[np.bool_]:
-    out = np.zeros(len(values), dtype=bool)
-    for first, limit in ((0, layout.force_range_N), (3, layout.torque_range_Nm)):
-        if limit is not None:
-            out |= np.any(np.abs(values[:, first : first + 3]) > limit, axis=1)
-    return out
 
 
 @dataclass(frozen=True)
@@ -259,7 +272,7 @@ def parse_rows(text: str, layout: SampleLayout, *, first_row: int, first_line: i
     values: list[list[float]] = []
     poses: list[str] = []
     kept: list[list[str]] = []
-    for cells in reader:
+    for cells in csv_rows(reader, lambda: f"{source}, row {first_row + len(kept)}", first_line):
         if not cells or all(not c.strip() for c in cells):
             continue
         where = f"{source}, row {first_row + len(kept)} (line {first_line - 1 + reader.line_num})"
@@ -333,6 +346,7 @@ class OrientationCheck:
         self._off_norm = 0
         self._first_off: tuple[int, float] | None = None
         self._max_abs_angle = 0.0
+        self._first_long_rotvec: tuple[int, float] | None = None
 
     def rotations(self, orient: NDArray[np.float64], first_row: int) -> NDArray[np.float64]:
         """``R_base_sensor`` (N, 3, 3) of a block's orientation values (N, k)."""
@@ -351,6 +365,10 @@ class OrientationCheck:
             self._off_norm += off.size
             rotations = Rotation.from_quat(orient)
         elif encoding == "rotvec":
+            norms = np.linalg.norm(orient, axis=1)
+            long = np.flatnonzero(norms > math.pi + 1e-3)  # degrees?
+            if long.size and self._first_long_rotvec is None:
+                self._first_long_rotvec = (first_row + int(long[0]), float(norms[long[0]]))
             rotations = Rotation.from_rotvec(orient)
         else:
             self._max_abs_angle = max(self._max_abs_angle, float(np.abs(orient).max(initial=0.0)))
@@ -372,5 +390,11 @@ class OrientationCheck:
             out.append(
                 f"{source}: every alpha_deg, beta_deg, gamma_deg is within +-pi: were the "
                 "angles given in radians? They are read as degrees"
+            )
+        if self._first_long_rotvec is not None:
+            row, norm = self._first_long_rotvec
+            out.append(
+                f"{source}: columns rx,ry,rz: a rotation vector longer than pi (row {row}: "
+                f"norm {norm:.4g}): were they given in degrees? They are read as radians"
             )
         return tuple(out)

@@ -35,6 +35,7 @@ from ftcomp.io.chunks import (
     DEFAULT_CHUNK_BYTES,
     CsvRows,
     LineChunk,
+    csv_rows,
     drop_blank_lines,
     iter_line_chunks,
     line_ends,
@@ -170,16 +171,22 @@ class SampleCsvReader:
         self._with_text, self._with_table = with_text, with_table
         self._handle = open_text(path)
         try:
-            header = next(csv.reader([read_first_line(self._handle, self.source)]), [])
-            if not any(cell.strip() for cell in header) and self._rest_is_blank():
+            where = f"{self.source}, header (line 1)"
+            first = csv.reader([read_first_line(self._handle, self.source)])
+            header = next(csv_rows(first, lambda: where, 1), [])
+            if not any(cell.strip() for cell in header):
+                expected = f"{','.join(WRENCH_COLUMNS)} and one orientation encoding"
+                if self._rest_is_blank():
+                    raise InputFileError(
+                        f"{self.source}: empty file; expected a header with {expected}"
+                    )
                 raise InputFileError(
-                    f"{self.source}: empty file; expected a header with "
-                    f"{','.join(WRENCH_COLUMNS)} and one orientation encoding"
+                    f"{where}: blank; the header ({expected}) must be the first line"
                 )
             self.layout = check_header(
                 header,
                 self.source,
-                where=f"{self.source}, header (line 1)",
+                where=where,
                 force_range_N=force_range_N,
                 torque_range_Nm=torque_range_Nm,
             )

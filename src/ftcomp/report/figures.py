@@ -25,6 +25,8 @@ if TYPE_CHECKING:
 __all__ = [
     "TRUE_FORCE_LABEL",
     "plot_continuous_pose",
+    "plot_fast_move",
+    "plot_online_load",
     "plot_placement",
     "plot_table3",
     "plot_table4",
@@ -198,3 +200,80 @@ def plot_placement(
     if title:
         fig.suptitle(title)
     _save(fig, path, dpi=100)
+
+
+def plot_online_load(
+    t: NDArray[np.float64],
+    mass_kg: NDArray[np.float64],
+    mass_std_kg: NDArray[np.float64],
+    cog_m: NDArray[np.float64],
+    contact_force_N: NDArray[np.float64],
+    events: Sequence[tuple[str, float]],
+    true_mass_kg: float,
+    true_cog_m: NDArray[np.float64],
+    path: str | os.PathLike[str],
+    *,
+    title: str,
+) -> None:
+    """Beyond the paper: an online load estimate (mass +- sigma, centre of gravity) over time,
+    and the compensated force, with the detected grasp and release marked."""
+    fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True, layout="constrained")
+    ax = axes[0]
+    ax.plot(t, mass_kg * 1e3, lw=1.0, label="estimate")
+    ax.fill_between(
+        t,
+        (mass_kg - 3 * mass_std_kg) * 1e3,
+        (mass_kg + 3 * mass_std_kg) * 1e3,
+        alpha=0.3,
+        label="± 3σ",
+    )
+    ax.axhline(true_mass_kg * 1e3, color="k", ls="--", lw=0.8, label="truth")
+    ax.set_ylim(-0.2 * true_mass_kg * 1e3, 1.4 * true_mass_kg * 1e3)
+    ax.set_ylabel("load mass [g]")
+    ax = axes[1]
+    for k, name in enumerate("xyz"):
+        ax.plot(t, cog_m[:, k] * 1e3, lw=1.0, label=f"c{name}")
+        ax.axhline(true_cog_m[k] * 1e3, color=f"C{k}", ls="--", lw=0.6)
+    ax.set_ylim(-40.0, 1.3 * max(1e3 * float(np.abs(true_cog_m).max()), 10.0))
+    ax.set_ylabel("centre of gravity [mm]")
+    ax = axes[2]
+    for k, name in enumerate("xyz"):
+        ax.plot(t, contact_force_N[:, k], lw=0.6, label=f"f{name}")
+    ax.set_ylabel("compensated force [N]")
+    ax.set_xlabel("t [s]")
+    for ax in axes:
+        for kind, te in events:
+            ax.axvline(te, color="r" if kind == "release" else "g", lw=0.8, alpha=0.7)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8)
+    fig.suptitle(title)
+    _save(fig, path)
+
+
+def plot_fast_move(
+    t: NDArray[np.float64],
+    static_force_N: NDArray[np.float64],
+    inertial_force_N: NDArray[np.float64],
+    path: str | os.PathLike[str],
+    *,
+    title: str,
+) -> None:
+    """Beyond the paper: the contact-free compensated force of a fast move, static-only and
+    with inertial compensation (thin: every reading; thick: 10 ms moving mean)."""
+    fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True, layout="constrained")
+    for k, ax in enumerate(axes):
+        for force, label, color in (
+            (static_force_N, "static only", "C3"),
+            (inertial_force_N, "static + inertial", "C0"),
+        ):
+            ax.plot(t, force[:, k], lw=0.3, color=color, alpha=0.35)
+            mean = uniform_filter1d(force[:, k], _MEAN_READINGS, mode="nearest")
+            ax.plot(t, mean, lw=1.2, color=color, label=label)
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.set_ylabel(_AXES[k])
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("t [s]")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=9)
+    fig.suptitle(title)
+    _save(fig, path)

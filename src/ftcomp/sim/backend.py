@@ -10,6 +10,11 @@ Robot URI options (all optional)::
           &seed=N             sensor-noise seed (default 0)
           &clearance_mm=X     start holding the grasped load X mm above the surface (needs
                               grasp=1 and a surface; for ``ftcomp run`` placements)
+          &gain_error_percent=G | g1,..,g6   sensor gain error per axis [%] (default 0)
+          &drift_N_per_min=X,Y,Z            force-bias drift rate [N/min] (default 0)
+          &drift_Nm_per_min=X,Y,Z           torque-bias drift rate [N*m/min] (default 0)
+          &drift_walk_N=S     force-bias random walk: its std after one minute [N]; the
+                              torque walk gets S times the torque/force noise ratio (default 0)
 
 The sensor URI is ``sim://`` with no options: the cell's own sensor, which needs the robot to be
 ``sim://`` too (they share the simulation clock). The simulated TCP is the sensor frame, so the
@@ -21,16 +26,19 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
+
 from ftcomp import paper
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.hardware.registry import Uri
 from ftcomp.sim.cell import SimCell
 from ftcomp.sim.scene import SceneConfig
+from ftcomp.sim.sensor import SensorSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS
 from ftcomp.sim.tool import LoadSpec
 
-__all__ = ["MAX_LOAD_KG", "open_robot", "open_sensor", "scene_from_uri"]
+__all__ = ["MAX_LOAD_KG", "open_robot", "open_sensor", "scene_from_uri", "sensor_spec_from_uri"]
 
 #: Largest load the simulated arm takes [kg] (the C4-A901S is rated for 4 kg).
 MAX_LOAD_KG = 4.0
@@ -71,12 +79,51 @@ def scene_from_uri(uri: Uri) -> tuple[SceneConfig, int, bool]:
     return scene, seed, grasp
 
 
+_SENSOR_OPTIONS = ("gain_error_percent", "drift_N_per_min", "drift_Nm_per_min", "drift_walk_N")
+
+
+def sensor_spec_from_uri(uri: Uri) -> SensorSpec:
+    """The sensor's realism options of a ``sim://`` URI (gain error, bias drift); only these
+    options are read (the rest are the scene's).
+
+    Raises:
+        ParameterError: a malformed or out-of-range value, naming the URI.
+    """
+    options = replace(uri, options={k: v for k, v in uri.options.items() if k in _SENSOR_OPTIONS})
+    reader = options.reader()
+    text = options.options.get("gain_error_percent")
+    gain = (
+        reader.floats("gain_error_percent", (0.0,) * 6)
+        if text is not None and "," in text
+        else (reader.number("gain_error_percent", 0.0) or 0.0,) * 6
+    )
+    rate_f = reader.floats("drift_N_per_min", (0.0, 0.0, 0.0))
+    rate_t = reader.floats("drift_Nm_per_min", (0.0, 0.0, 0.0))
+    walk = reader.number("drift_walk_N", 0.0) or 0.0
+    reader.done()
+    if any(abs(g) >= 50.0 for g in gain):
+        raise ParameterError(f"{uri.text!r}: gain_error_percent must be within +-50 %")
+    if walk < 0.0:
+        raise ParameterError(f"{uri.text!r}: drift_walk_N must be >= 0, got {walk}")
+    base = SensorSpec()
+    walk_6 = np.repeat([walk, walk * base.torque_noise_std_Nm / base.force_noise_std_N], 3)
+    return replace(
+        base,
+        gain_error_fraction=np.array(gain) / 100.0,
+        bias_drift_rate_per_s=np.array([*rate_f, *rate_t]) / 60.0,
+        bias_walk_per_sqrt_s=walk_6 / math.sqrt(60.0),
+    )
+
+
 def open_robot(uri: Uri) -> Robot:
     """A fresh simulated cell."""
     clearance_mm = uri.options.get("clearance_mm")
-    options = {k: v for k, v in uri.options.items() if k != "clearance_mm"}
+    spec = sensor_spec_from_uri(uri)
+    options = {
+        k: v for k, v in uri.options.items() if k != "clearance_mm" and k not in _SENSOR_OPTIONS
+    }
     scene, seed, grasp = scene_from_uri(replace(uri, options=options))
-    cell = SimCell(scene, seed=seed)
+    cell = SimCell(scene, spec, seed=seed)
     if clearance_mm is None:
         if grasp:
             cell.grasp()

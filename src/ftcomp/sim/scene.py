@@ -71,6 +71,10 @@ class SceneConfig:
         arm, tool, table, sponge, book: the parts' specifications.
         timestep_s: physics step [s]; the cell's control period must be a whole multiple.
         noslip_iterations: MuJoCo no-slip solver iterations (stops a held contact from creeping).
+        integrator: MuJoCo's integrator. ``"implicitfast"`` (default) is the most stable with
+            stiff contacts, but its sensors report forces of the explicit acceleration, not the
+            one the arm performs (the implicit damping of the servos changes it); ``"Euler"``
+            keeps the F/T sensor consistent with the motion, as dynamic experiments need.
     """
 
     tilt_U_rad: float = 0.0
@@ -85,6 +89,7 @@ class SceneConfig:
     book: BookSpec = field(default_factory=BookSpec)
     timestep_s: float = 0.001
     noslip_iterations: int = 2
+    integrator: str = "implicitfast"
 
     def __post_init__(self) -> None:
         for name in ("tilt_U_rad", "tilt_V_rad"):
@@ -99,6 +104,8 @@ class SceneConfig:
             raise ParameterError("a load needs the gripper (SceneConfig.gripper=True)")
         if not math.isfinite(self.timestep_s) or not 0.0 < self.timestep_s <= 0.002:
             raise ParameterError(f"timestep_s must be in (0, 0.002] s, got {self.timestep_s}")
+        if self.integrator not in ("implicitfast", "implicit", "Euler", "RK4"):
+            raise ParameterError(f"unknown integrator {self.integrator!r}")
         if self.noslip_iterations < 0:
             raise ParameterError(f"noslip_iterations must be >= 0, got {self.noslip_iterations}")
 
@@ -312,7 +319,7 @@ def build_mjcf(config: SceneConfig) -> str:
     )
     return f"""<mujoco model="ftcomp_cell">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{config.timestep_s:.12g}" integrator="implicitfast" cone="elliptic"
+  <option timestep="{config.timestep_s:.12g}" integrator="{config.integrator}" cone="elliptic"
           impratio="10" noslip_iterations="{config.noslip_iterations}" tolerance="1e-6"
           gravity="0 0 {-STANDARD_GRAVITY_MPS2:.12g}"/>
   <worldbody>

@@ -7,6 +7,10 @@ the negated MuJoCo sensor data; on top of it :class:`SensorSpec` adds, in this o
 ``F0, M0``, Gaussian noise, quantisation to the resolution, and saturation at the range (a reading
 beyond the overload limit also sets a latched ``overloaded`` flag). Readings come at the output rate
 (1.2 kHz), stamped with the sensor's tick time; the physics state between ticks is held.
+
+Optional realism, off by default: a per-axis gain error (the reading is ``(1 + gain) * ideal``;
+the paper's sensor is specified at +-1.5 %) and a slow bias drift, a constant rate plus a
+random walk (a temperature-like wander), both functions of the sensor's tick time.
 """
 
 from __future__ import annotations
@@ -47,6 +51,13 @@ class SensorSpec:
         force_bias_N: zero offset F0 [N], sensor frame.
         torque_bias_Nm: zero offset M0 [N*m], sensor frame.
         output_rate_Hz: output rate [Hz].
+        gain_error_fraction: per-axis gain error, the reading is ``(1 + g) * ideal``, shape (6,)
+            (0.015 is +1.5 %); default zeros.
+        bias_drift_rate_per_s: bias drift rate ``[N/s]*3 + [N*m/s]*3``, shape (6,); default zeros.
+        bias_walk_per_sqrt_s: random-walk intensity of the bias, ``[N/sqrt(s)]*3 +
+            [N*m/sqrt(s)]*3``, shape (6,): after ``t`` seconds the walk's standard deviation is
+            this times ``sqrt(t)``; default zeros. Its own generator (seeded from the sensor's
+            seed), so turning it on leaves the noise sequence unchanged.
 
     The paper gives no noise figure; the default noise is one resolution count (0.125 N,
     0.003 N*m), which also dithers the quantiser so that means of many readings are unbiased.
@@ -64,6 +75,9 @@ class SensorSpec:
         default_factory=lambda: np.array(paper.TORQUE_BIAS_Nm)
     )
     output_rate_Hz: float = 1200.0
+    gain_error_fraction: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    bias_drift_rate_per_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    bias_walk_per_sqrt_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
 
     def __post_init__(self) -> None:
         positive = ("force_range_N", "torque_range_Nm", "output_rate_Hz")
@@ -85,6 +99,17 @@ class SensorSpec:
             raise ParameterError("SensorSpec.resolution_fraction_of_range must be below 1")
         for name in ("force_bias_N", "torque_bias_Nm"):
             freeze_field(self, name, (3,), finite=True)
+        for name in ("gain_error_fraction", "bias_drift_rate_per_s", "bias_walk_per_sqrt_s"):
+            freeze_field(self, name, (6,), finite=True)
+        if np.any(np.abs(self.gain_error_fraction) >= 0.5):
+            raise ParameterError("SensorSpec.gain_error_fraction must be within +-0.5 per axis")
+        if np.any(self.bias_walk_per_sqrt_s < 0.0):
+            raise ParameterError("SensorSpec.bias_walk_per_sqrt_s must be >= 0 per axis")
+
+    @property
+    def drifts(self) -> bool:
+        """Whether the bias drifts (a rate or a random walk is set)."""
+        return bool(np.any(self.bias_drift_rate_per_s) or np.any(self.bias_walk_per_sqrt_s))
 
     def ideal(self) -> SensorSpec:
         """The same sensor without noise and quantisation (bias, range and rate kept)."""
@@ -139,7 +164,7 @@ class SensorSpec:
             beyond its overload limit).
         """
         ideal = np.asarray(ideal_wrench, dtype=float)
-        loaded = ideal + self.bias_6
+        loaded = ideal * (1.0 + self.gain_error_fraction) + self.bias_6
         overloaded = np.any(np.abs(loaded) > self.overload_6, axis=-1)
         reading = loaded + np.asarray(standard_normal, dtype=float) * self.noise_std_6
         step = self.step_6
@@ -186,6 +211,13 @@ class SimWrenchSensor:
         self._inv_step = 1.0 / self._step if self._step is not None else np.ones(6)
         self._overload = spec.overload_6
         self._ns_per_tick = _NS_PER_S / spec.output_rate_Hz
+        # Optional realism (None / False: the fast path above is unchanged).
+        gain = spec.gain_error_fraction
+        self._gain = 1.0 + gain if np.any(gain) else None
+        self._drifting = spec.drifts
+        self._walk_rng = np.random.default_rng(None if seed is None else [seed, 0x0D21F7])
+        self._walk = np.zeros(6)
+        self._walk_tick = 0
 
     @property
     def spec(self) -> SensorSpec:
@@ -215,8 +247,33 @@ class SimWrenchSensor:
             filled += take
         return out
 
+    def drift(self, first_tick: int, n: int) -> NDArray[np.float64]:
+        """The bias drift at ticks ``first_tick .. first_tick + n - 1``, shape (n, 6).
+
+        Rate times tick time plus the random walk, advanced tick by tick (a gap since the last
+        call is one step of the same distribution); ticks must not go back.
+        """
+        spec = self._spec
+        dt = 1.0 / spec.output_rate_Hz
+        ticks = first_tick + np.arange(n)
+        out = np.outer(ticks * dt, spec.bias_drift_rate_per_s)
+        if not np.any(spec.bias_walk_per_sqrt_s) or n == 0:
+            return out
+        scale = spec.bias_walk_per_sqrt_s * math.sqrt(dt)
+        gap = first_tick - self._walk_tick
+        if gap > 1:  # ticks skipped: one step of their summed variance
+            self._walk += self._walk_rng.standard_normal(6) * scale * math.sqrt(gap - 1)
+        steps = self._walk_rng.standard_normal((n, 6)) * scale
+        if gap < 1:  # the first tick was drawn before (read, then read_new of the same tick)
+            steps[0] = 0.0
+        walk = self._walk + np.cumsum(steps, axis=0)
+        self._walk = walk[-1].copy()
+        self._walk_tick = first_tick + n - 1
+        return out + walk
+
     def convert(self, ideal_wrench: ArrayLike) -> NDArray[np.float64]:
-        """Readings for ideal wrenches at consecutive new ticks, shape (N, 6) (draws noise)."""
+        """Readings for ideal wrenches at consecutive new ticks, shape (N, 6) (draws noise;
+        the bias drift, when on, is added by :meth:`read` and :meth:`read_new`)."""
         ideal = np.atleast_2d(np.asarray(ideal_wrench, dtype=float))
         readings, overloaded = self._spec.apply(ideal, self._draw(len(ideal)))
         self._overloaded = self._overloaded or bool(np.any(overloaded))
@@ -247,6 +304,10 @@ class SimWrenchSensor:
             self._block = self._rng.standard_normal((_NOISE_BLOCK, 6))
             self._next = 0
         x = self._ideal()
+        if self._gain is not None:
+            x *= self._gain
+        if self._drifting:
+            x += self.drift(k, 1)[0]
         x += self._bias
         x += self._block[self._next] * self._std
         self._next += 1
@@ -276,8 +337,11 @@ class SimWrenchSensor:
         n = k - self._last_tick
         if n <= 0:
             return []
-        readings = self.convert(np.broadcast_to(self._ideal(), (n, 6)))
         first = self._last_tick + 1
+        ideal = np.broadcast_to(self._ideal(), (n, 6))
+        if self._drifting:  # added as the bias is: after the gain, before noise
+            ideal = ideal + self.drift(first, n) / (1.0 + self._spec.gain_error_fraction)
+        readings = self.convert(ideal)
         samples = [WrenchSample(self._stamp_ns(first + i), readings[i]) for i in range(n)]
         self._last_tick = k
         self._last = samples[-1]

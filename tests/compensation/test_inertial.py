@@ -1,0 +1,60 @@
+"""Inertial compensation: the static model plus the Newton-Euler wrench, and the simulator."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from tests.compensation.test_kinematics import analytic_path
+
+from ftcomp.compensation.inertial import InertialCompensator
+from ftcomp.constants import STANDARD_GRAVITY_MPS2
+from ftcomp.errors import ParameterError
+from ftcomp.experiments.beyond_inertial import excitation_moves, record_moves
+from ftcomp.kinematics import inertial_wrench, sensor_motion
+from ftcomp.model import GravityModel
+from ftcomp.sim.cell import HOME_Q_RAD, SimCell
+from ftcomp.sim.scene import SceneConfig
+from ftcomp.sim.sensor import SensorSpec
+
+TOOL = GravityModel(
+    3.2,
+    np.array([0.001, -0.002, 0.05]),
+    np.array([0.3, -0.2, 0.1]),
+    np.array([0.01, 0.02, -0.01]),
+    tilt_U_rad=0.003,
+    tilt_V_rad=-0.002,
+)
+INERTIA = np.array([[8e-4, 1e-5, 0.0], [1e-5, 8e-4, 2e-5], [0.0, 2e-5, 4e-4]])
+
+
+def test_noise_free_moving_readings_compensate_to_zero() -> None:
+    _t, _p, R, motion = analytic_path()
+    mass = TOOL.weight_N / STANDARD_GRAVITY_MPS2
+    readings = TOOL.predict(R) + inertial_wrench(mass, TOOL.center_of_gravity_m, INERTIA, motion)
+    out = InertialCompensator(TOOL, INERTIA).compensate(readings, R, motion)
+    np.testing.assert_allclose(out, 0.0, atol=1e-12)
+
+
+def test_compensator_rejects_a_bad_inertia() -> None:
+    with pytest.raises(ParameterError, match="inertia_cog_kgm2"):
+        InertialCompensator(TOOL, np.eye(2))
+
+
+def test_kinematics_from_simulated_poses_match_the_simulators_truth() -> None:
+    cell = SimCell(SceneConfig(integrator="Euler"), SensorSpec(), seed=1)
+    moves = excitation_moves(0.7)
+    moves.append((np.array(HOME_Q_RAD) + np.array([0.5, 0.3, -0.3, 0.0, 0.0, 0.0]), 0.8))
+    rec = record_moves(cell, moves)
+    motion = sensor_motion(rec.t, rec.p, rec.R)
+    inner = slice(20, -20)
+    peak_a = np.abs(rec.truth[:, 0:3]).max()
+    peak_alpha = np.abs(rec.truth[:, 6:9]).max()
+
+    # RMS within 1 % of the peaks: the filter smooths the servos' transients at the moves' ends.
+    def rms(x: np.ndarray) -> float:
+        return float(np.sqrt(np.mean(x**2)))
+
+    assert rms(motion.accel_sensor_mps2[inner] - rec.truth[inner, 0:3]) < 0.01 * peak_a
+    peak_w = np.abs(rec.truth[:, 3:6]).max()
+    assert rms(motion.omega_sensor_rad_s[inner] - rec.truth[inner, 3:6]) < 0.01 * peak_w
+    assert rms(motion.alpha_sensor_rad_s2[inner] - rec.truth[inner, 6:9]) < 0.01 * peak_alpha
