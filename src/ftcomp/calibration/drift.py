@@ -26,17 +26,15 @@ from ftcomp.arrays import freeze_field
 from ftcomp.calibration.extended import MountAxes, fit_extended
 from ftcomp.calibration.identify import (
     Calibration,
-    StandardErrors,
     _groups,
     _model,
-    _propagate,
+    _standard_errors,
     calibrate,
     pose_means,
 )
 from ftcomp.calibration.methods import fit_paper, joint_sigma
 from ftcomp.calibration.mount import MIN_POSES, mount_from_fit, mount_warnings
 from ftcomp.errors import IdentificationError
-from ftcomp.frames import tilt_from_gravity_in_base
 from ftcomp.model import GravityModel
 from ftcomp.samples import Samples
 
@@ -167,17 +165,8 @@ def calibrate_extended(
     )
     theta, cov = fit.theta, fit.covariance
     model = _model(theta)
-    gvu = _propagate(lambda th: np.array(tilt_from_gravity_in_base(th[0:3])), theta, cov[:12, :12])
     se = _se(np.diag(cov))
-    std_errors = StandardErrors(
-        weight_N=float(gvu[0]),
-        center_of_gravity_m=se[9:12],
-        force_bias_N=se[3:6],
-        torque_bias_Nm=se[6:9],
-        tilt_U_rad=float(gvu[1]),
-        tilt_V_rad=float(gvu[2]),
-        gravity_base_N=se[0:3],
-    )
+    std_errors = _standard_errors(theta, cov)
     drift = None
     if order:
         scale = np.repeat(half ** -np.arange(1, order + 1, dtype=float), 6)

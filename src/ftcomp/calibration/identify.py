@@ -275,6 +275,24 @@ def _propagate(
     return np.sqrt(np.maximum(np.diag(J @ cov @ J.T), 0.0))
 
 
+def _standard_errors(theta: NDArray[np.float64], cov: NDArray[np.float64]) -> StandardErrors:
+    """Standard errors of the model's quantities from the fit's first 12 parameters
+    ``[gravity_base (3), F0 (3), M0 (3), P (3)]`` and their covariance (weight and tilt by
+    first-order propagation); any further parameters (drift, mount) are ignored here."""
+    theta, cov = theta[:12], cov[:12, :12]
+    gvu = _propagate(lambda th: np.array(tilt_from_gravity_in_base(th[0:3])), theta, cov)
+    se = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    return StandardErrors(
+        weight_N=float(gvu[0]),
+        center_of_gravity_m=se[9:12],
+        force_bias_N=se[3:6],
+        torque_bias_Nm=se[6:9],
+        tilt_U_rad=float(gvu[1]),
+        tilt_V_rad=float(gvu[2]),
+        gravity_base_N=se[0:3],
+    )
+
+
 def _model(theta: NDArray[np.float64]) -> GravityModel:
     return GravityModel.from_gravity_in_base(theta[0:3], theta[9:12], theta[3:6], theta[6:9])
 
@@ -306,19 +324,7 @@ def calibrate(
     fit, sigma = fit_method(method, wrench, R, var_mean, count)
     check_fit(fit.theta, fit.covariance, samples.source)
     model = _model(fit.theta)
-    gvu = _propagate(
-        lambda th: np.array(tilt_from_gravity_in_base(th[0:3])), fit.theta, fit.covariance
-    )
-    se = np.sqrt(np.maximum(np.diag(fit.covariance), 0.0))
-    std_errors = StandardErrors(
-        weight_N=float(gvu[0]),
-        center_of_gravity_m=se[9:12],
-        force_bias_N=se[3:6],
-        torque_bias_Nm=se[6:9],
-        tilt_U_rad=float(gvu[1]),
-        tilt_V_rad=float(gvu[2]),
-        gravity_base_N=se[0:3],
-    )
+    std_errors = _standard_errors(fit.theta, fit.covariance)
     residuals = wrench - model.predict(R)
     with np.errstate(divide="ignore", invalid="ignore"):
         relative = 100.0 * np.abs(residuals) / np.abs(wrench)
