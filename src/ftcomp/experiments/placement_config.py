@@ -69,7 +69,9 @@ class PlacementConfig:
         approach_gap_m: clearance between load and surface at the start [m].
         position_speed_m_per_s: descent speed of the position-only mode [m/s].
         position_depth_m: position-only end point below the surface top [m] (the planned
-            height is wrong by this much, as a camera-located surface would be).
+            height is wrong by this much, as a camera-located surface would be). The paper
+            gives neither its target nor its surfaces' stiffness; 4.5 mm makes our sponge's
+            press the size of the paper's (Fig. 6: -1.467 N at the end).
         travel_margin_m: the maximum travel is ``approach_gap_m + travel_margin_m`` (plus the
             depth in position mode) [m].
         max_force_N: protective stop above this contact-force norm [N].
@@ -96,7 +98,7 @@ class PlacementConfig:
     gentle_press_N: float = 0.25
     approach_gap_m: float = 0.002
     position_speed_m_per_s: float = 0.004
-    position_depth_m: float = 0.004
+    position_depth_m: float = 0.0045
     travel_margin_m: float = 0.008
     max_force_N: float = 40.0
     max_speed_m_per_s: float = 0.02
