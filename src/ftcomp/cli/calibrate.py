@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ftcomp.calibration.identify import Calibration, calibrate
-from ftcomp.cli.common import parse_range, print_warnings
+from ftcomp.cli.common import add_range_argument, print_warnings
 from ftcomp.errors import ParameterError
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.calibration_json import calibration_to_dict, save_calibration
@@ -66,13 +66,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         "in that frame too (yaw about its z axis, 4+ poses; or all three angles, 6+ poses; "
         "joint method; default: the orientations are the sensor's)",
     )
-    parser.add_argument(
-        "--range",
-        metavar="FORCE_N,TORQUE_NM",
-        type=parse_range,
-        help="sensor range [N],[N·m], e.g. 250,6: a reading beyond it is an error "
-        "(default: no check)",
-    )
+    add_range_argument(parser)
     parser.add_argument(
         "--json",
         action="store_true",

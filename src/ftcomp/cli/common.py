@@ -7,7 +7,7 @@ import math
 import sys
 from collections.abc import Iterable
 
-__all__ = ["parse_range", "print_warnings"]
+__all__ = ["add_range_argument", "parse_range", "print_warnings"]
 
 
 def parse_range(text: str) -> tuple[float, float]:
@@ -28,3 +28,14 @@ def print_warnings(warnings: Iterable[str]) -> None:
     """One ``warning: ...`` line per warning, on stderr."""
     for warning in warnings:
         print(f"warning: {warning}", file=sys.stderr)
+
+
+def add_range_argument(parser: argparse.ArgumentParser) -> None:
+    """``--range FORCE_N,TORQUE_NM``: readings beyond the sensor's range are bad input."""
+    parser.add_argument(
+        "--range",
+        metavar="FORCE_N,TORQUE_NM",
+        type=parse_range,
+        help="sensor range [N],[N·m], e.g. 250,6: a reading beyond it is an error "
+        "(default: no check)",
+    )

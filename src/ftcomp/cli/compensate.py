@@ -25,7 +25,7 @@ from typing import Any, BinaryIO
 import numpy as np
 from numpy.typing import NDArray
 
-from ftcomp.cli.common import parse_range, print_warnings
+from ftcomp.cli.common import add_range_argument, print_warnings
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.errors import ParameterError
 from ftcomp.io.atomic import atomic_output, check_writable
@@ -70,13 +70,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="output CSV or .parquet: the input columns plus the contact wrench fx_ext..tz_ext "
         "[N, N·m] and load_weight_N [N] (required; never the input file)",
     )
-    parser.add_argument(
-        "--range",
-        metavar="FORCE_N,TORQUE_NM",
-        type=parse_range,
-        help="sensor range [N],[N·m], e.g. 250,6: a reading beyond it is an error "
-        "(default: no check)",
-    )
+    add_range_argument(parser)
     parser.add_argument(
         "--json",
         action="store_true",

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 import time
-from types import TracebackType
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,13 +21,13 @@ from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.pacing import RateLimiter
-from ftcomp.hardware.protocols import PoseSample, Robot
+from ftcomp.hardware.protocols import NothingToClose, PoseSample, Robot
 from ftcomp.hardware.registry import Uri
 
 __all__ = ["FixedRobot", "open_robot"]
 
 
-class FixedRobot:
+class FixedRobot(NothingToClose):
     """A robot that does not move (see the module docstring).
 
     Args:
@@ -62,18 +61,6 @@ class FixedRobot:
     def late_in_a_row(self) -> int:
         """Periods missed in a row up to now."""
         return self.pacer.late_in_a_row
-
-    def __enter__(self) -> FixedRobot:
-        """Nothing to connect."""
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        """Nothing to close."""
 
     def now_ns(self) -> int:
         """The host's monotonic clock [ns]."""

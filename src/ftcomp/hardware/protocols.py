@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from types import TracebackType
-from typing import Protocol, TypeVar, runtime_checkable
+from typing import Protocol, Self, TypeVar, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from ftcomp.arrays import freeze_field
 from ftcomp.errors import ParameterError
 
-__all__ = ["Mount", "PoseSample", "Robot", "WrenchSample", "WrenchSensor"]
+__all__ = ["Mount", "NothingToClose", "PoseSample", "Robot", "WrenchSample", "WrenchSensor"]
 
 _NS_PER_S = 1_000_000_000
 _SensorT = TypeVar("_SensorT", bound="WrenchSensor")
@@ -187,6 +187,24 @@ class Mount:
         out = np.array(twist_sensor_base, dtype=float)
         out[:3] += np.cross(out[3:], lever)
         return out
+
+
+class NothingToClose:
+    """The lifecycle of a backend with nothing to connect or close (a simulated or replayed
+    sensor, a fixed robot): entering returns it, leaving does nothing. A backend that connects
+    overrides ``__enter__`` and keeps this ``__exit__`` if it has nothing of its own to close."""
+
+    def __enter__(self) -> Self:
+        """Nothing to connect."""
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Nothing to close."""
 
 
 @runtime_checkable

@@ -22,7 +22,6 @@ import csv
 import math
 import time
 from pathlib import Path
-from types import TracebackType
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,7 +29,13 @@ from numpy.typing import NDArray
 from ftcomp.errors import HardwareError, InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, rotation_from_encoding
 from ftcomp.hardware.pacing import RateLimiter, on_host_clock
-from ftcomp.hardware.protocols import PoseSample, Robot, WrenchSample, WrenchSensor
+from ftcomp.hardware.protocols import (
+    NothingToClose,
+    PoseSample,
+    Robot,
+    WrenchSample,
+    WrenchSensor,
+)
 from ftcomp.hardware.registry import Uri
 
 __all__ = [
@@ -116,7 +121,7 @@ class _Clock:
         return self.start_ns + round((time.monotonic_ns() - self.host0_ns) * self.speed)
 
 
-class ReplayRobot:
+class ReplayRobot(NothingToClose):
     """Replays the recorded poses; the session's clock is the recording's."""
 
     clock_name = "replay"
@@ -139,14 +144,6 @@ class ReplayRobot:
         """Start the clock at the first stamp."""
         self.clock = _Clock(int(self.log.t_ns[0]), self.speed)
         return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        """Nothing to close."""
 
     def now_ns(self) -> int:
         """The recording's time now [ns]."""
@@ -186,24 +183,12 @@ class ReplayRobot:
         """Nothing moves."""
 
 
-class ReplaySensor:
+class ReplaySensor(NothingToClose):
     """Replays the recorded readings on the session's clock."""
 
     def __init__(self, log: ReplayLog, clock: _Clock, *, host_stamps: bool) -> None:
         self.log, self.clock, self.host_stamps = log, clock, host_stamps
         self._next = 0
-
-    def __enter__(self) -> ReplaySensor:
-        """Nothing to connect."""
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        """Nothing to close."""
 
     def _sample(self, i: int) -> WrenchSample:
         t_ns = int(self.log.t_ns[i])

@@ -5,20 +5,19 @@ from __future__ import annotations
 
 import math
 import time
-from types import TracebackType
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import ParameterError
-from ftcomp.hardware.protocols import Robot, WrenchSample, WrenchSensor
+from ftcomp.hardware.protocols import NothingToClose, Robot, WrenchSample, WrenchSensor
 from ftcomp.hardware.registry import Uri
 from ftcomp.hardware.ur import URRobot
 
 __all__ = ["URWrenchSensor", "open_sensor"]
 
 
-class URWrenchSensor:
+class URWrenchSensor(NothingToClose):
     """The UR's built-in F/T sensor, read from the robot's RTDE stream.
 
     Args:
@@ -46,14 +45,6 @@ class URWrenchSensor:
             )
         self._update()
         return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        """Nothing to close: the robot owns the connection."""
 
     def _update(self) -> None:
         robot = self.robot

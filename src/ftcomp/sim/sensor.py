@@ -18,7 +18,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from types import TracebackType
 from typing import Final
 
 import numpy as np
@@ -27,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from ftcomp import paper
 from ftcomp.arrays import freeze_field
 from ftcomp.errors import ParameterError
-from ftcomp.hardware.protocols import WrenchSample
+from ftcomp.hardware.protocols import NothingToClose, WrenchSample
 
 __all__ = ["SensorSpec", "SimWrenchSensor"]
 
@@ -174,7 +173,7 @@ class SensorSpec:
         return np.clip(reading, -rng, rng), np.asarray(overloaded)
 
 
-class SimWrenchSensor:
+class SimWrenchSensor(NothingToClose):
     """The simulated sensor: implements :class:`ftcomp.hardware.protocols.WrenchSensor`.
 
     Args:
@@ -208,8 +207,10 @@ class SimWrenchSensor:
         self._step = spec.step_6 if spec.resolution_fraction_of_range > 0.0 else None
         self._range = spec.range_6
         self._range_ft = (spec.force_range_N, spec.torque_range_Nm)
-        self._steps = tuple(self._step.tolist()) if self._step is not None else None
-        self._inv_steps = tuple((1.0 / self._step).tolist()) if self._step is not None else None
+        # (step, 1 / step) per axis as floats, or None without quantisation.
+        self._quantum: tuple[list[float], list[float]] | None = (
+            None if self._step is None else (self._step.tolist(), (1.0 / self._step).tolist())
+        )
         self._offsets: list[list[float]] = []
         self._overload = spec.overload_6
         self._ns_per_tick = _NS_PER_S / spec.output_rate_Hz
@@ -286,18 +287,6 @@ class SimWrenchSensor:
         self._overloaded = self._overloaded or bool(np.any(overloaded))
         return readings
 
-    def __enter__(self) -> SimWrenchSensor:
-        """Nothing to connect: the sensor lives in the cell."""
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        """Nothing to close."""
-
     def _stamp_ns(self, k: int) -> int:
         """The time stamp of output tick ``k`` [ns] on the simulation clock."""
         return round(k * self._ns_per_tick)
@@ -331,8 +320,8 @@ class SimWrenchSensor:
             if not self._overloaded and np.any(np.abs(arr) > self._overload):
                 self._overloaded = True
             x = np.clip(arr, -self._range, self._range).tolist()
-        if self._steps is not None:
-            (i0, i1, i2, i3, i4, i5), (s0, s1, s2, s3, s4, s5) = self._inv_steps, self._steps
+        if self._quantum is not None:
+            (s0, s1, s2, s3, s4, s5), (i0, i1, i2, i3, i4, i5) = self._quantum
             x0, x1, x2, x3, x4, x5 = x
             # round() halves to even, as numpy's rint; round(v) * s == rint(v) * s exactly.
             x = [
