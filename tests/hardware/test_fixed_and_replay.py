@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +45,27 @@ def test_replaying_a_log_through_stream_gives_back_every_row(
     start = round((logged[0, 0] - data[0, 0]) / PERIOD_S)
     assert n >= ROWS - 4 and start <= 2
     assert np.allclose(logged[:, :7], data[start : start + n, :7], rtol=0, atol=1e-9)
+
+
+def test_a_loop_that_stalls_past_the_end_still_gets_every_row(
+    tmp_path: Path, rng: np.random.Generator
+) -> None:
+    source = tmp_path / "in.csv"
+    data, _ = _recording(source, rng)
+    uri = f"replay://{source}?speed=10"  # the 0.3 s recording lasts 30 ms
+    with open_robot(uri) as robot:
+        sensor = open_sensor(uri, robot)
+        with sensor:
+            first = sensor.read_new()
+            time.sleep(0.1)  # the loop stalls until well past the end
+            robot.pose()  # rows are still to be handed out: not the end yet
+            rest = sensor.read_new()
+            stamps = [s.t_ns for s in first + rest]
+            assert stamps == data[:, 0].round(9).__mul__(1e9).round().astype(int).tolist()
+            with pytest.raises(EndOfReplayError):
+                sensor.read_new()
+            with pytest.raises(EndOfReplayError):
+                robot.pose()
 
 
 def test_a_replayed_sensor_alone_runs_on_the_hosts_clock(

@@ -384,3 +384,15 @@ def test_a_failing_chunk_is_narrowed_down_and_rows_after_a_skipped_one_keep_thei
     bad = write(tmp_path, QUAT_HEADER + "\n" + "\n".join(rows) + "\n", "bad.csv")
     with pytest.raises(InputFileError, match=r"row 1800 \(line 1802\): 13 cells but the header"):
         read_samples(bad)
+
+
+def test_time_stamps_keep_their_microseconds_on_a_unix_clock(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # Ten significant digits of 1.7e9 s would round every stamp to the second.
+    t = 1_763_790_000.0 + np.array([0.0, 0.001, 0.002001])
+    path = tmp_path / "s.csv"
+    samples_csv.write_samples(
+        path, np.zeros((3, 6)), Rotation.identity(3), encoding="quaternion", t=t
+    )
+    back = samples_csv.read_samples(path).t
+    assert back is not None
+    np.testing.assert_allclose(np.diff(back), np.diff(t), rtol=0, atol=1e-6)  # float64 at 1.7e9

@@ -160,6 +160,7 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.experiments.live import RUN_COLUMNS, CompliantStep, SettleRule
     from ftcomp.io.atomic import atomic_output, check_writable
     from ftcomp.io.calibration_json import load_calibration
+    from ftcomp.io.samples_csv import format_row
 
     _check(args)
     output = check_writable(args.output, overwrite=args.force, inputs=[args.calibration])
@@ -182,7 +183,7 @@ def run(args: argparse.Namespace) -> int:
             def write_row(row: object) -> None:
                 values = list(row)  # type: ignore[call-overload]
                 rows.append(values)
-                writer.writerow([f"{v:.9g}" for v in values])
+                writer.writerow(format_row(values))
 
             step = CompliantStep(
                 controller,

@@ -62,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.hardware.replay import EndOfReplayError
     from ftcomp.io.atomic import atomic_output, check_writable
     from ftcomp.io.calibration_json import load_calibration
+    from ftcomp.io.samples_csv import format_row
 
     if not (math.isfinite(args.seconds) and args.seconds > 0.0):
         raise ParameterError(f"--seconds must be > 0, got {args.seconds:g}")
@@ -89,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
             writer.writerow(stream_columns(with_pose=with_pose, compensated=model is not None))
 
             def write_row(row: object) -> None:
-                writer.writerow([f"{v:.10g}" for v in row])  # type: ignore[attr-defined]
+                writer.writerow(format_row(row))  # type: ignore[arg-type]
 
             logger = StreamLogger(
                 sensor, write_row, args.seconds, with_pose=with_pose, compensator=compensator

@@ -111,14 +111,23 @@ class ReplayLog:
 
 
 class _Clock:
-    """File time running at ``speed`` times the host's monotonic clock from when it starts."""
+    """File time running at ``speed`` times the host's monotonic clock from its first reading
+    (not from when it was made: setting up a loop must not skip the recording's first rows)."""
 
     def __init__(self, start_ns: int, speed: float) -> None:
         self.start_ns, self.speed = start_ns, speed
-        self.host0_ns = time.monotonic_ns()
+        self._host0_ns: int | None = None
+
+    @property
+    def host0_ns(self) -> int:
+        """The host's monotonic time [ns] at the recording's first stamp."""
+        if self._host0_ns is None:
+            self._host0_ns = time.monotonic_ns()
+        return self._host0_ns
 
     def now_ns(self) -> int:
-        return self.start_ns + round((time.monotonic_ns() - self.host0_ns) * self.speed)
+        host0 = self.host0_ns
+        return self.start_ns + round((time.monotonic_ns() - host0) * self.speed)
 
 
 class ReplayRobot(NothingToClose):
@@ -134,6 +143,10 @@ class ReplayRobot(NothingToClose):
         self.log, self.speed = log, speed
         self.clock = _Clock(int(log.t_ns[0]), speed)
         self.pacer = RateLimiter(log.period_s / speed, name=type(self).__name__, log_overruns=False)
+        #: The sensor replaying the same file on this clock, if any: the replay ends when it
+        #: has handed out every row, not when the clock passes the end (a loop that stalled
+        #: near the end would otherwise lose the last rows).
+        self.linked_sensor: ReplaySensor | None = None
 
     @property
     def control_period_s(self) -> float:
@@ -153,7 +166,9 @@ class ReplayRobot(NothingToClose):
         """The recorded pose at the clock's time."""
         now = self.now_ns()
         i = max(self.log.index_at(now), 0)
-        if now > self.log.t_ns[-1] + round(self.log.period_s * 1e9):
+        linked = self.linked_sensor
+        past_end = now > self.log.t_ns[-1] + round(self.log.period_s * 1e9)
+        if past_end and not (linked is not None and linked.pending):
             raise EndOfReplayError(f"{self.log.path}: end of the recording")
         assert self.log.R is not None
         return PoseSample(now, self.log.p[i], self.log.R[i])
@@ -189,6 +204,7 @@ class ReplaySensor(NothingToClose):
     def __init__(self, log: ReplayLog, clock: _Clock, *, host_stamps: bool) -> None:
         self.log, self.clock, self.host_stamps = log, clock, host_stamps
         self._next = 0
+        self._streaming = False  # read_new was called: hand out every row before the end
 
     def _sample(self, i: int) -> WrenchSample:
         t_ns = int(self.log.t_ns[i])
@@ -197,9 +213,14 @@ class ReplaySensor(NothingToClose):
             t_ns = clock.host0_ns + round((t_ns - clock.start_ns) / clock.speed)
         return WrenchSample(t_ns, self.log.wrench[i])
 
+    @property
+    def pending(self) -> bool:
+        """Whether a caller of :meth:`read_new` has rows still to receive."""
+        return self._streaming and self._next < len(self.log.t_ns)
+
     def _index(self) -> int:
         now = self.clock.now_ns()
-        if now > self.log.t_ns[-1] + round(self.log.period_s * 1e9):
+        if now > self.log.t_ns[-1] + round(self.log.period_s * 1e9) and not self.pending:
             raise EndOfReplayError(f"{self.log.path}: end of the recording")
         return max(self.log.index_at(now), 0)
 
@@ -208,7 +229,9 @@ class ReplaySensor(NothingToClose):
         return self._sample(self._index())
 
     def read_new(self) -> list[WrenchSample]:
-        """Every reading that became due since the previous call."""
+        """Every reading that became due since the previous call (after the end of the
+        recording: the rows not yet handed out, then :class:`EndOfReplayError`)."""
+        self._streaming = True
         i = self._index()
         out = [self._sample(k) for k in range(self._next, i + 1)]
         self._next = i + 1
@@ -239,7 +262,8 @@ def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
     mapped onto the host's monotonic clock from now."""
     path, speed = _path_and_speed(uri)
     if isinstance(robot, ReplayRobot) and Path(robot.log.path).resolve() == Path(path).resolve():
-        return ReplaySensor(robot.log, robot.clock, host_stamps=False)
+        robot.linked_sensor = ReplaySensor(robot.log, robot.clock, host_stamps=False)
+        return robot.linked_sensor
     if robot is not None and not on_host_clock(robot):
         raise ParameterError(f"{uri.text!r}: replay with this robot's clock is not possible")
     log = ReplayLog(path)

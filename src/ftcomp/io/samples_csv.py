@@ -57,6 +57,8 @@ if TYPE_CHECKING:
 
 __all__ = [
     "SampleCsvReader",
+    "format_row",
+    "format_time",
     "open_samples",
     "read_samples",
     "write_samples",
@@ -361,6 +363,18 @@ def _fmt(value: float) -> str:
     return f"{value:.10g}"
 
 
+def format_time(t_s: float) -> str:
+    """A time stamp [s] as text to the nanosecond: fixed-point, because ten significant digits
+    of a clock that has run for hours (or of a Unix time) would drop the milliseconds."""
+    return f"{t_s:.9f}"
+
+
+def format_row(row: Sequence[float]) -> list[str]:
+    """A log row whose first value is a time stamp [s]: the time to the nanosecond
+    (:func:`format_time`), every other value to ten significant digits."""
+    return [format_time(row[0]), *(_fmt(v) for v in row[1:])]
+
+
 def write_samples(
     path: str | os.PathLike[str],
     wrench_sensor: ArrayLike,
@@ -389,7 +403,7 @@ def write_samples(
         columns.append([str(p) for p in np.asarray(pose).ravel()])
     if t is not None:
         header.append("t")
-        columns.append([_fmt(v) for v in np.asarray(t, dtype=float).ravel()])
+        columns.append([format_time(v) for v in np.asarray(t, dtype=float).ravel()])
     header.extend(ENCODING_COLUMNS[encoding])
     columns.extend([_fmt(v) for v in orient[:, j]] for j in range(orient.shape[1]))
     header.extend(WRENCH_COLUMNS)
