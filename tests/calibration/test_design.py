@@ -16,7 +16,7 @@ from ftcomp.calibration.design import (
     tilt_from_down_rad,
 )
 from ftcomp.calibration.identify import calibrate
-from ftcomp.calibration.methods import _residuals
+from ftcomp.calibration.methods import joint_residuals
 from ftcomp.errors import ParameterError
 from ftcomp.model import GravityModel
 from ftcomp.samples import Samples
@@ -33,8 +33,8 @@ def test_fisher_blocks_match_finite_differences_of_the_residuals() -> None:
         d = np.zeros(12)
         d[k] = h
         J[:, k] = (
-            _residuals(THETA + d, R, np.zeros((5, 6)), sigma)
-            - _residuals(THETA - d, R, np.zeros((5, 6)), sigma)
+            joint_residuals(THETA + d, R, np.zeros((5, 6)), sigma)
+            - joint_residuals(THETA - d, R, np.zeros((5, 6)), sigma)
         ) / (2 * h)
     # Central differences of a quadratic-at-most model: agreement to ~1e-6 relative.
     np.testing.assert_allclose(fisher_blocks(R, THETA).sum(axis=0), J.T @ J, rtol=1e-5, atol=1e-3)

@@ -125,20 +125,19 @@ def test_standard_errors_are_honest_over_many_trials() -> None:
 
 
 def test_joint_jacobian_matches_finite_differences(rng) -> None:
-    from ftcomp.calibration.methods import _jacobian, _residuals
+    from ftcomp.calibration.methods import joint_jacobian, joint_residuals
 
     R = Rotation.random(5, rng=rng).as_matrix()
     theta = rng.normal(size=12)
     wrench = rng.normal(size=(5, 6))
     sigma = rng.uniform(0.5, 2.0, size=(5, 6))
-    J = _jacobian(theta, R, wrench, sigma)
+    J = joint_jacobian(theta, R, wrench, sigma)
     numeric = np.zeros_like(J)
     for k in range(12):
         d = np.zeros(12)
         d[k] = 1e-6
-        numeric[:, k] = (
-            _residuals(theta + d, R, wrench, sigma) - _residuals(theta - d, R, wrench, sigma)
-        ) / 2e-6
+        up = joint_residuals(theta + d, R, wrench, sigma)
+        numeric[:, k] = (up - joint_residuals(theta - d, R, wrench, sigma)) / 2e-6
     np.testing.assert_allclose(J, numeric, atol=1e-7)
 
 

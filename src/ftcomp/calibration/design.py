@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp import paper
-from ftcomp.calibration.methods import _jacobian
+from ftcomp.calibration.methods import joint_jacobian
 from ftcomp.errors import ParameterError
 from ftcomp.frames import gravity_in_base
 
@@ -125,7 +125,7 @@ def fisher_blocks(
     """
     R = np.asarray(R_base_sensor, dtype=float)
     sigma = np.broadcast_to(noise_6 / math.sqrt(readings_per_pose), (len(R), 6))
-    J = _jacobian(theta, R, np.zeros((len(R), 6)), sigma).reshape(len(R), 6, 12)
+    J = joint_jacobian(theta, R, np.zeros((len(R), 6)), sigma).reshape(len(R), 6, 12)
     return np.einsum("mki,mkj->mij", J, J)
 
 

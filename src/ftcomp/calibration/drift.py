@@ -217,7 +217,7 @@ def _leave_one_out(
     axes: MountAxes | None,
 ) -> NDArray[np.float64]:
     """Each pose's reading minus its prediction by a refit to the others (at its time)."""
-    from ftcomp.calibration.extended import _predict
+    from ftcomp.calibration.extended import predict_extended
 
     P = len(wrench)
     out = np.full_like(wrench, np.nan)
@@ -239,7 +239,7 @@ def _leave_one_out(
             mount_axes=axes,
             phi0=x[12 + 6 * order :] if n_phi else None,
         )
-        out[i] = wrench[i] - _predict(fit.x, R[i : i + 1], basis[i : i + 1], order, axes)[0]
+        out[i] = wrench[i] - predict_extended(fit.x, R[i : i + 1], basis[i : i + 1], order, axes)[0]
     return out
 
 

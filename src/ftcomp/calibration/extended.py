@@ -21,9 +21,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.methods import _jacobian, predict_wrench
+from ftcomp.calibration.methods import joint_jacobian, predict_wrench
 
-__all__ = ["ExtendedFit", "MountAxes", "fit_extended", "mount_matrix"]
+__all__ = ["ExtendedFit", "MountAxes", "fit_extended", "mount_matrix", "predict_extended"]
 
 MountAxes = Literal["yaw", "full"]
 
@@ -75,13 +75,23 @@ class ExtendedFit:
         return self.x[12 + 6 * self.order :]
 
 
-def _predict(
+def predict_extended(
     x: NDArray[np.float64],
     R_rec: NDArray[np.float64],
     basis: NDArray[np.float64],
     order: int,
     axes: MountAxes | None,
 ) -> NDArray[np.float64]:
+    """The wrench an extended fit predicts, shape (N, 6).
+
+    Args:
+        x: the fit's parameters: the joint method's 12, then ``6 * order`` bias-drift
+            coefficients, then the mount's (1 for yaw, 3 for full, none without).
+        R_rec: the recorded orientations (the sensor's, or the flange's with a mount), (N, 3, 3).
+        basis: the drift basis per row (powers of the scaled time), (N, order).
+        order: the drift polynomial's order (0: constant bias).
+        axes: the mount parameters, or None.
+    """
     R = R_rec @ mount_matrix(x[12 + 6 * order :], axes)
     out = predict_wrench(x[:12], R)
     if order:
@@ -123,11 +133,11 @@ def fit_extended(
     x0 = np.concatenate([theta0, np.zeros(6 * order), np.zeros(n_phi) if phi0 is None else phi0])
 
     def residuals(x: NDArray[np.float64]) -> NDArray[np.float64]:
-        return ((_predict(x, R_rec, basis, order, mount_axes) - wrench) / sigma).ravel()
+        return ((predict_extended(x, R_rec, basis, order, mount_axes) - wrench) / sigma).ravel()
 
     def jacobian(x: NDArray[np.float64]) -> NDArray[np.float64]:
         R = R_rec @ mount_matrix(x[12 + 6 * order :], mount_axes)
-        cols = [_jacobian(x[:12], R, wrench, sigma)]
+        cols = [joint_jacobian(x[:12], R, wrench, sigma)]
         if order:  # d reading[p, c] / d c[k, c] = tau_p^k
             D = np.zeros((len(wrench), 6, order, 6))
             for c in range(6):

@@ -34,10 +34,10 @@ from ftcomp.calibration.methods import (
     Fit,
     Method,
     P,
-    _jacobian,
-    _residuals,
     fit_method,
     force_regressor,
+    joint_jacobian,
+    joint_residuals,
     predict_wrench,
     torque_regressor,
 )
@@ -105,8 +105,8 @@ def loo_joint_one_step(
     """The joint method's leave-one-pose-out error by one Gauss-Newton step per pose from the
     full fit (an approximation, see the module docstring), shape (P, 6)."""
     usable = reduced_condition(R_base_sensor) <= CONDITION_SINGULAR
-    r = _residuals(fit.theta, R_base_sensor, wrench, sigma).reshape(-1, 6)
-    J = _jacobian(fit.theta, R_base_sensor, wrench, sigma).reshape(-1, 6, 12)
+    r = joint_residuals(fit.theta, R_base_sensor, wrench, sigma).reshape(-1, 6)
+    J = joint_jacobian(fit.theta, R_base_sensor, wrench, sigma).reshape(-1, 6, 12)
     blocks = np.einsum("kij,kil->kjl", J, J)
     reduced = blocks.sum(axis=0) - blocks
     reduced[~usable] = np.eye(12)

@@ -24,6 +24,8 @@ __all__ = [
     "fit_method",
     "fit_paper",
     "force_regressor",
+    "joint_jacobian",
+    "joint_residuals",
     "joint_sigma",
     "predict_wrench",
     "skew_stack",
@@ -117,22 +119,24 @@ def fit_paper(wrench: NDArray[np.float64], R_base_sensor: NDArray[np.float64]) -
     return Fit(theta, J @ cov_in @ J.T)
 
 
-def _residuals(
+def joint_residuals(
     theta: NDArray[np.float64],
     R_base_sensor: NDArray[np.float64],
     wrench: NDArray[np.float64],
     sigma: NDArray[np.float64],
 ) -> NDArray[np.float64]:
+    """The joint method's residuals, prediction minus reading over the noise, shape (6P,)."""
     return ((predict_wrench(theta, R_base_sensor) - wrench) / sigma).ravel()
 
 
-def _jacobian(
+def joint_jacobian(
     theta: NDArray[np.float64],
     R_base_sensor: NDArray[np.float64],
     wrench: NDArray[np.float64],
     sigma: NDArray[np.float64],
 ) -> NDArray[np.float64]:
-    """Analytic Jacobian of :func:`_residuals`, shape (6P, 12)."""
+    """Analytic Jacobian of the joint method's weighted residuals (:func:`joint_residuals`) in its
+    12 parameters, shape (6P, 12): for pose design, leave-one-out and extended fits."""
     n = len(R_base_sensor)
     Rt = np.transpose(R_base_sensor, (0, 2, 1))
     g_s = theta[A] @ R_base_sensor
@@ -168,9 +172,9 @@ def fit_joint(
     from scipy.optimize import least_squares  # imported here: it takes a second to load
 
     result = least_squares(
-        _residuals,
+        joint_residuals,
         initial,
-        jac=_jacobian,
+        jac=joint_jacobian,
         args=(R_base_sensor, wrench, sigma),
         method="lm",
         xtol=1e-15,
