@@ -160,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.experiments.live import RUN_COLUMNS, CompliantStep, SettleRule
     from ftcomp.io.atomic import atomic_output, check_writable
     from ftcomp.io.calibration_json import load_calibration
-    from ftcomp.io.samples_csv import format_row
+    from ftcomp.io.numtext import format_row
 
     _check(args)
     output = check_writable(args.output, overwrite=args.force, inputs=[args.calibration])

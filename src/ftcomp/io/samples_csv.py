@@ -42,6 +42,7 @@ from ftcomp.io.chunks import (
     open_text,
     read_first_line,
 )
+from ftcomp.io.numtext import format_time
 from ftcomp.io.sample_format import (
     OrientationCheck,
     SampleBlock,
@@ -57,8 +58,6 @@ if TYPE_CHECKING:
 
 __all__ = [
     "SampleCsvReader",
-    "format_row",
-    "format_time",
     "open_samples",
     "read_samples",
     "write_samples",
@@ -361,18 +360,6 @@ def write_table(
 
 def _fmt(value: float) -> str:
     return f"{value:.10g}"
-
-
-def format_time(t_s: float) -> str:
-    """A time stamp [s] as text to the nanosecond: fixed-point, because ten significant digits
-    of a clock that has run for hours (or of a Unix time) would drop the milliseconds."""
-    return f"{t_s:.9f}"
-
-
-def format_row(row: Sequence[float]) -> list[str]:
-    """A log row whose first value is a time stamp [s]: the time to the nanosecond
-    (:func:`format_time`), every other value to ten significant digits."""
-    return [format_time(row[0]), *(_fmt(v) for v in row[1:])]
 
 
 def write_samples(
