@@ -95,3 +95,15 @@ def test_wrong_width_and_unknown_encoding_are_rejected() -> None:
 def test_zero_gravity_has_no_tilt() -> None:
     with pytest.raises(ParameterError, match="zero vector"):
         tilt_from_gravity_in_base([0, 0, 0])
+
+
+def test_quat_from_matrix_is_scipys_quaternion_sign_included() -> None:
+    from ftcomp.frames import quat_from_matrix
+
+    # Random rotations and the four branches' edge cases (identity, half turns about each axis).
+    matrices = [*Rotation.random(2000, rng=5).as_matrix(), np.eye(3)]
+    matrices += [np.diag(d) for d in ([1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0])]
+    for R in matrices:
+        np.testing.assert_allclose(
+            quat_from_matrix(R), Rotation.from_matrix(R).as_quat(), rtol=0, atol=1e-12
+        )

@@ -20,13 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.controller import AdmittanceController, ControllerState
 from ftcomp.control.filters import LowPassFilter
 from ftcomp.control.loop import Reading
 from ftcomp.errors import ParameterError
+from ftcomp.frames import quat_from_matrix
 from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.samples import WRENCH_COLUMNS
 
@@ -108,7 +108,7 @@ class StreamLogger:
             return None
         pose: list[float] = []
         if self.with_pose:
-            pose = [*Rotation.from_matrix(r.R_base_sensor).as_quat().tolist(), *r.p_base_sensor]
+            pose = [*quat_from_matrix(r.R_base_sensor), *r.p_base_sensor.tolist()]
         for sample in self.sensor.read_new():
             w = sample.wrench_sensor
             row = [sample.t_ns * 1e-9, *w.tolist(), *pose]
