@@ -45,3 +45,24 @@ def test_negative_seeds_and_absurd_counts_are_refused_before_any_file_is_written
     err = capsys.readouterr().err
     assert err.startswith("error: ") and err.count("\n") == 1
     assert not out.exists()
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly(tmp_path: Path) -> None:
+    # `ftcomp poses design ... | head -1`: the pipe breaks while the errors are printed. (The
+    # commands that print tables through rich get rich's own handling: the same, exit code 1.)
+    import subprocess
+    import sys
+
+    argv = [sys.executable, "-c", "import sys; from ftcomp.cli import main; sys.exit(main())"]
+    out = tmp_path / "poses.csv"
+    proc = subprocess.Popen(
+        [*argv, "poses", "design", "--count", "6", "-o", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()  # the reader is gone before the first line
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 141
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
+    assert out.exists()  # the file was written before the printing

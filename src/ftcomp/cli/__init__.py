@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 from typing import NoReturn
@@ -19,6 +20,8 @@ from ftcomp import __version__
 __all__ = ["COMMANDS", "SIM_COMMANDS", "build_parser", "main"]
 
 EXIT_BAD_INPUT = 2
+#: Exit code when the reader of standard output went away (128 + SIGPIPE, as a shell's).
+EXIT_BROKEN_PIPE = 141
 
 #: Top-level commands: name -> (module, one-line help).
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -122,7 +125,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("error: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        if not _stdout_closed():
+            raise
+        # The reader went away (``ftcomp ... | head``): stop quietly, as a shell tool does, and
+        # keep the interpreter's last flush from failing again.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_BROKEN_PIPE
     return code
+
+
+def _stdout_closed() -> bool:
+    """Whether standard output is a pipe whose reader has gone (POLLERR on its write end), so
+    that a broken socket of a backend is not mistaken for it."""
+    import select
+
+    try:
+        poller = select.poll()
+        poller.register(sys.stdout.fileno(), select.POLLOUT)
+    except (AttributeError, OSError, ValueError):  # no real file behind stdout
+        return False
+    return any(events & select.POLLERR for _, events in poller.poll(0))
 
 
 if __name__ == "__main__":  # pragma: no cover
