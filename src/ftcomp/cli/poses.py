@@ -1,4 +1,5 @@
-"""``ftcomp poses design --count N -o poses.csv [--robot URI] [--max-tilt-deg D] [--keep FILE]``."""
+"""``ftcomp poses design --count N -o poses.csv [--robot URI | --urdf FILE] [--max-tilt-deg D]
+[--keep FILE]``."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import argparse
 import csv
 import io
 import math
+import sys
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,7 +44,8 @@ def register(parser: argparse.ArgumentParser) -> None:
             "centre of gravity and tilt most precise (D-optimal on its Fisher information, "
             "greedy plus exchange), reachable by the robot, ordered to keep the travel short; "
             "prints the predicted standard error of every parameter beside the paper's nine "
-            "poses'. The CSV (pose,qx,qy,qz,qw) is a --poses file for sim collect and record."
+            "poses'. The CSV (pose,qx,qy,qz,qw; with --urdf also x_m,y_m,z_m) is a --poses "
+            "file for sim collect and record."
         ),
     )
     design.add_argument(
@@ -51,11 +54,42 @@ def register(parser: argparse.ArgumentParser) -> None:
     design.add_argument(
         "-o", "--output", required=True, metavar="POSES.csv", help="the pose file to write"
     )
-    design.add_argument(
+    reach = design.add_mutually_exclusive_group()
+    reach.add_argument(
         "--robot",
         metavar="URI",
         help="keep only poses this robot reaches (inverse kinematics within joint limits at "
         "the collection position; sim://...) (default: no reachability check)",
+    )
+    reach.add_argument(
+        "--urdf",
+        metavar="ROBOT.urdf",
+        help="keep only poses this robot description reaches: inverse kinematics of the chain "
+        "from --base-link to --tip-link within the URDF's joint limits, the tip at "
+        "--position-mm; the file then lists that position (x_m,y_m,z_m) (default: no "
+        "reachability check)",
+    )
+    design.add_argument(
+        "--base-link",
+        metavar="LINK",
+        help="with --urdf: the robot's base link, the frame of the poses (default: the URDF's "
+        "root link)",
+    )
+    design.add_argument(
+        "--tip-link",
+        metavar="LINK",
+        help="with --urdf: the sensor's measuring frame, whose orientations the file lists "
+        "(default: the URDF's one leaf link that a movable joint leads to)",
+    )
+    design.add_argument(
+        "--position-mm",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        help="with --urdf: the tip's origin for every pose, base-link frame [mm], as record's "
+        "--position-mm (default: in front of the robot at shoulder height, half the chain's "
+        "length from the first joint towards the tip at the zero configuration, or, if out of "
+        "reach, the tip at the middle of every joint's range; printed)",
     )
     design.add_argument(
         "--max-tilt-deg",
@@ -97,13 +131,82 @@ def _reachability(uri: str):  # type: ignore[no-untyped-def]
     return reachable, robot
 
 
-def _csv(R: NDArray[np.float64], ids: list[str]) -> str:
+def _position_m(position_mm: list[float]) -> NDArray[np.float64]:
+    """``--position-mm X Y Z`` as metres."""
+    p = np.array(position_mm) / 1000.0
+    if not np.isfinite(p).all():
+        raise ParameterError(f"--position-mm {position_mm}: need three finite numbers X Y Z [mm]")
+    return p
+
+
+#: The URDF design gives up (bounded time: each unreachable candidate costs every IK start and
+#: a new design round) after this many unreachable candidates, or after ``_FEW`` when most of
+#: those checked are unreachable.
+_MAX_UNREACHABLE = 150
+_FEW = 20
+
+
+class _UrdfReach:
+    """``R -> bool`` by the URDF chain's inverse kinematics at one tip position; counts."""
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        from ftcomp.ros2.urdf import UrdfChain
+        from ftcomp.ros2.urdf_ik import UrdfIk, front_position, mid_configuration
+
+        self.chain = UrdfChain(args.urdf, args.base_link, args.tip_link)
+        self.ik = UrdfIk(self.chain)
+        given = args.position_mm is not None
+        self.p = _position_m(args.position_mm) if given else front_position(self.chain)
+        if not given and self.ik.solve(self.p) is None:  # a short or odd chain
+            self.p = self.ik.pose(mid_configuration(self.chain))[0]
+        where = (
+            "--position-mm " + " ".join(f"{v:g}" for v in args.position_mm)
+            if given
+            else "the default position"
+        )
+        if self.ik.solve(self.p) is None:
+            raise ParameterError(
+                f"{where} {np.round(self.p, 4).tolist()} m: the tip link {self.chain.tip_link!r} "
+                f"of {args.urdf} cannot reach it within the joint limits"
+            )
+        self.checked = self.reached = 0
+
+    def __call__(self, R: NDArray[np.float64]) -> bool:
+        self.checked += 1
+        ok = self.ik.solve(self.p, R) is not None
+        self.reached += ok
+        missed = self.checked - self.reached
+        if missed >= _MAX_UNREACHABLE or (missed >= _FEW and missed > self.reached):
+            raise ParameterError(
+                f"--urdf {self.chain.source}: {missed} of the {self.checked} candidate "
+                f"orientations checked are out of reach with the tip at "
+                f"{np.round(self.p, 4).tolist()} m; too few reachable ones to design from: "
+                "give a --position-mm where the arm turns the tip more freely, or a smaller "
+                "--max-tilt-deg"
+            )
+        return ok
+
+    def summary(self) -> str:
+        c = self.chain
+        return (
+            f"reachability: {c.source}, {c.base_link} -> {c.tip_link} ({len(c.joint_names)} "
+            f"joints), tip at {np.round(self.p, 4).tolist()} m: {self.reached} of "
+            f"{self.checked} candidate orientations checked reached by inverse kinematics"
+        )
+
+
+def _csv(R: NDArray[np.float64], ids: list[str], p: NDArray[np.float64] | None) -> str:
+    """The pose file; with positions ``p`` (N, 3) [m] also ``x_m,y_m,z_m``."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["pose", "qx", "qy", "qz", "qw", "tilt_deg"])
+    at = ["x_m", "y_m", "z_m"] if p is not None else []
+    writer.writerow(["pose", "qx", "qy", "qz", "qw", *at, "tilt_deg"])
     quat = Rotation.from_matrix(R).as_quat(canonical=True)
-    for pid, q, tilt in zip(ids, quat, np.degrees(tilt_from_down_rad(R)), strict=True):
-        writer.writerow([pid, *(f"{v:.12f}" for v in q), f"{tilt:.3f}"])
+    for k, (pid, q, tilt) in enumerate(
+        zip(ids, quat, np.degrees(tilt_from_down_rad(R)), strict=True)
+    ):
+        xyz = [f"{v:.6f}" for v in p[k]] if p is not None else []
+        writer.writerow([pid, *(f"{v:.12f}" for v in q), *xyz, f"{tilt:.3f}"])
     return out.getvalue()
 
 
@@ -121,13 +224,17 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--count {args.count}: must be at least 1")
     if not math.isfinite(args.max_tilt_deg) or not 0.0 < args.max_tilt_deg <= 180.0:
         raise ParameterError(f"--max-tilt-deg {args.max_tilt_deg:g}: must be in (0, 180]")
-    inputs = [args.keep] if args.keep else []
+    for flag in ("base_link", "tip_link", "position_mm"):
+        if getattr(args, flag) is not None and args.urdf is None:
+            raise ParameterError(f"--{flag.replace('_', '-')} needs --urdf")
+    inputs = [f for f in (args.keep, args.urdf) if f]
     output = check_writable(args.output, overwrite=args.force, inputs=inputs)
     kept = read_pose_file(args.keep) if args.keep else None
     R_keep = kept.rotations.as_matrix().reshape(-1, 3, 3) if kept is not None else None
+    urdf = _UrdfReach(args) if args.urdf else None
     theta = nominal_theta()
     candidates = candidate_orientations(args.max_tilt_deg)
-    reachable, robot = _reachability(args.robot) if args.robot else (None, None)
+    reachable, robot = _reachability(args.robot) if args.robot else (urdf, None)
     try:
         designed = design_poses(args.count, candidates, theta, keep=R_keep, reachable=reachable)
     finally:
@@ -141,13 +248,29 @@ def run(args: argparse.Namespace) -> int:
     fresh = (f"d{k}" for k in range(1, args.count + len(taken) + 1) if f"d{k}" not in taken)
     ids = [*(kept.ids if kept is not None else ()), *(next(fresh) for _ in range(args.count))]
     ids = [ids[i] for i in order]
-    atomic_write_text(output, _csv(R_all, ids))
+    p_all = None  # with --urdf: where each pose is reached (kept poses: their own, if given)
+    if urdf is not None:
+        p_all = np.tile(urdf.p, (len(R_all), 1))
+        if kept is not None and kept.positions_base_m is not None:
+            p_all[:n_keep] = kept.positions_base_m
+        p_all = p_all[order]
+    atomic_write_text(output, _csv(R_all, ids, p_all))
     ours = predicted_std_errors(R_all, theta)
     theirs = predicted_std_errors(paper.paper_poses().rotations.as_matrix(), theta)
     print(
         f"{len(R_all)} poses ({n_keep} kept, {args.count} designed, max tilt "
         f"{np.degrees(tilt_from_down_rad(R_all)).max():.1f} deg) written to {output}"
     )
+    if urdf is not None:
+        print(urdf.summary())
+    if urdf is not None and p_all is not None:
+        for pid, R, p in zip(ids, R_all, p_all, strict=True):
+            if pid in taken and urdf.ik.solve(p, R) is None:
+                print(
+                    f"warning: kept pose {pid}: the URDF's inverse kinematics does not reach it "
+                    f"with the tip at {np.round(p, 4).tolist()} m",
+                    file=sys.stderr,
+                )
     print("predicted standard errors, joint method, 500 readings per pose at the paper's noise:")
     print(f"  {'parameter':<10} {'these poses':<36} the paper's 9 poses")
     for name in PARAMETER_NAMES:
