@@ -96,3 +96,30 @@ def test_bad_arguments_are_one_line_errors(
     _, _, code = _collect(tmp_path, *extra)
     assert code == 2
     assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("reach", ["robot", "urdf"])
+def test_designed_poses_are_all_reached_by_sim_collect(tmp_path: Path, reach: str) -> None:
+    # Issue 15: a design checked by the simulated arm's IK (--robot), or by its URDF's
+    # (--urdf, the same arm described as a URDF, at a position of its own), is a --poses file
+    # that the cell visits pose for pose.
+    import numpy as np
+
+    from ftcomp.io.samples_csv import read_samples
+    from ftcomp.sim import SceneConfig, SimCell
+    from ros2.simbag import urdf_of_cell
+
+    poses = tmp_path / "poses.csv"
+    design = ["poses", "design", "--count", "9", "-o", str(poses)]
+    if reach == "robot":
+        design += ["--robot", "sim://"]
+    else:
+        urdf = tmp_path / "arm.urdf"
+        urdf.write_text(urdf_of_cell(SimCell(SceneConfig())), encoding="utf-8")
+        design += ["--urdf", str(urdf), "--position-mm", "450", "0", "420"]
+    assert main(design) == 0
+    samples, _, code = _collect(tmp_path, "--poses", str(poses))
+    assert code == 0
+    got = read_samples(samples)
+    assert got.pose is not None
+    assert len(np.unique(got.pose)) == 9 and len(got.pose) == 9 * 40
