@@ -107,3 +107,16 @@ def test_quat_from_matrix_is_scipys_quaternion_sign_included() -> None:
         np.testing.assert_allclose(
             quat_from_matrix(R), Rotation.from_matrix(R).as_quat(), rtol=0, atol=1e-12
         )
+
+
+def test_rotvec_conversions_on_floats_are_scipys() -> None:
+    from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
+
+    rng = np.random.default_rng(6)
+    # Random rotations (angles up to pi) and tiny ones (the series branch).
+    rotvecs = [*Rotation.random(2000, rng=rng).as_rotvec(), *(rng.normal(size=(50, 3)) * 1e-8)]
+    for r in rotvecs:
+        R = Rotation.from_rotvec(r).as_matrix()
+        np.testing.assert_allclose(matrix_from_rotvec(r), R, rtol=0, atol=1e-14)
+        expected = Rotation.from_matrix(R).as_rotvec()
+        np.testing.assert_allclose(rotvec_from_matrix(R), expected, rtol=0, atol=1e-14)

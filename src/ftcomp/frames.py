@@ -35,8 +35,10 @@ __all__ = [
     "encode_orientation",
     "gravity_in_base",
     "gravity_in_sensor",
+    "matrix_from_rotvec",
     "quat_from_matrix",
     "rotation_from_encoding",
+    "rotvec_from_matrix",
     "tilt_from_gravity_in_base",
 ]
 
@@ -195,3 +197,35 @@ def quat_from_matrix(R: NDArray[np.float64]) -> list[float]:
         q = [m21 - m12, m02 - m20, m10 - m01, 1.0 + trace]
     norm = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     return [q[0] / norm, q[1] / norm, q[2] / norm, q[3] / norm]
+
+
+def matrix_from_rotvec(rotvec: ArrayLike) -> NDArray[np.float64]:
+    """One rotation vector [rad] (3,) as a rotation matrix (3, 3), by Rodrigues' formula on
+    floats: ``Rotation.from_rotvec(r).as_matrix()`` to rounding, without scipy's per-call cost
+    (for a robot driver's per-cycle pose)."""
+    x, y, z = (float(v) for v in np.asarray(rotvec, dtype=float).reshape(3))
+    theta2 = x * x + y * y + z * z
+    if theta2 < 1e-12:  # sin(t)/t and (1 - cos(t))/t^2 by their series, exact to rounding
+        a, b = 1.0 - theta2 / 6.0, 0.5 - theta2 / 24.0
+    else:
+        theta = math.sqrt(theta2)
+        a, b = math.sin(theta) / theta, (1.0 - math.cos(theta)) / theta2
+    return np.array(
+        [
+            [1.0 - b * (y * y + z * z), b * x * y - a * z, b * x * z + a * y],
+            [b * x * y + a * z, 1.0 - b * (x * x + z * z), b * y * z - a * x],
+            [b * x * z - a * y, b * y * z + a * x, 1.0 - b * (x * x + y * y)],
+        ]
+    )
+
+
+def rotvec_from_matrix(R: NDArray[np.float64]) -> list[float]:
+    """One rotation matrix (3, 3) as a rotation vector [rad], angle in [0, pi]: what
+    ``Rotation.from_matrix(R).as_rotvec()`` gives, through :func:`quat_from_matrix`."""
+    qx, qy, qz, qw = quat_from_matrix(R)
+    if qw < 0.0:  # the same rotation with the angle in [0, pi]
+        qx, qy, qz, qw = -qx, -qy, -qz, -qw
+    s = math.sqrt(qx * qx + qy * qy + qz * qz)
+    angle = 2.0 * math.atan2(s, qw)
+    scale = angle / s if s > 1e-12 else 2.0 / qw  # small angles: 2 / cos(angle / 2) -> 2
+    return [qx * scale, qy * scale, qz * scale]

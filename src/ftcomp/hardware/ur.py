@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
+from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
 from ftcomp.hardware.pacing import RateLimiter
 from ftcomp.hardware.protocols import PoseSample, Robot
 from ftcomp.hardware.registry import Uri
@@ -69,7 +70,7 @@ _MOVEL_RAD_PER_M = 4.0
 
 
 def _pose_list(p: NDArray[np.float64], R: NDArray[np.float64]) -> list[float]:
-    return [*map(float, p), *map(float, Rotation.from_matrix(R).as_rotvec())]
+    return [*map(float, p), *rotvec_from_matrix(R)]
 
 
 class URRobot:
@@ -223,7 +224,7 @@ class URRobot:
         """The TCP pose in the base frame, stamped on the host's clock when read."""
         self.check()
         x = self.receive.getActualTCPPose()
-        R = Rotation.from_rotvec(x[3:6]).as_matrix()
+        R = matrix_from_rotvec(x[3:6])
         return PoseSample(time.monotonic_ns(), np.array(x[0:3], dtype=float), R)
 
     def joint_speed_rad_s(self) -> float:
@@ -316,7 +317,7 @@ class URRobot:
             self._servo_target = (here.p_base_tcp.copy(), here.R_base_tcp.copy())
         p, R = self._servo_target
         p = p + tw[:3] * dt
-        R = Rotation.from_rotvec(tw[3:] * dt).as_matrix() @ R
+        R = matrix_from_rotvec(tw[3:] * dt) @ R
         self._servo_target = (p, R)
         control.servoL(_pose_list(p, R), 0.0, 0.0, dt, 0.1, 300.0)
 

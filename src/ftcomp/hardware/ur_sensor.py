@@ -7,9 +7,9 @@ import math
 import time
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import ParameterError
+from ftcomp.frames import matrix_from_rotvec
 from ftcomp.hardware.protocols import NothingToClose, Robot, WrenchSample, WrenchSensor
 from ftcomp.hardware.registry import Uri
 from ftcomp.hardware.ur import URRobot
@@ -58,7 +58,7 @@ class URWrenchSensor(NothingToClose):
             w = np.array(r.getFtRawWrench(), dtype=float)
         else:
             x = r.getActualTCPPose()
-            R_base_tcp = Rotation.from_rotvec(x[3:6]).as_matrix()
+            R_base_tcp = matrix_from_rotvec(x[3:6])
             w_base = np.array(r.getActualTCPForce(), dtype=float)
             w = np.concatenate([R_base_tcp.T @ w_base[:3], R_base_tcp.T @ w_base[3:]])
         self._last = WrenchSample(time.monotonic_ns(), self.sign * w)
