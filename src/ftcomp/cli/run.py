@@ -11,6 +11,12 @@ logs every command and sends none. The run ends after ``--seconds``, or once the
 error has stayed within ``--settle-band-N`` (e.g. a load set down), with exit 0. A protective
 stop, a sensor fault, a lost connection or a loop that keeps missing its period stops the robot
 at once and exits 1 with the reason; Ctrl-C stops the robot first and exits 130.
+
+``--online-load`` also weighs what the gripper grasps during the run and, once the estimate has
+converged, compensates it like the tool, so that after a grasp the controller sees only contact
+forces. The estimator runs once per cycle (its rate is 1 / the robot's control period); the log
+gains the load columns of ``ftcomp stream --online-load`` and the end lists the events. Start
+with the gripper empty: a load held from the start is no step and counts as contact.
 """
 
 from __future__ import annotations
@@ -49,6 +55,12 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="from ftcomp calibrate",
     )
     p("--control", choices=("admittance",), required=True, help="the controller")
+    p(
+        "--online-load",
+        action="store_true",
+        help="weigh a grasped load online (rate: 1 / the robot's control period [Hz]) and "
+        "compensate it too (default: off, the tool alone)",
+    )
     p("--law", choices=_LAWS, default="combined", help="admittance law (default combined)")
     p("--axes", default="z", help="axes that yield to force, e.g. z or x,y,z,rz (default z)")
     p("--frame", choices=("base", "sensor"), default="base", help="axes of --axes (base)")
@@ -158,6 +170,12 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.compensation.compensator import GravityCompensator
     from ftcomp.control.loop import ControlCycle, run_loop
     from ftcomp.experiments.live import RUN_COLUMNS, CompliantStep, SettleRule
+    from ftcomp.experiments.live_load import (
+        LOAD_COLUMNS,
+        LoadTracker,
+        event_lines,
+        require_tool_weight,
+    )
     from ftcomp.io.atomic import atomic_output, check_writable
     from ftcomp.io.calibration_json import load_calibration
     from ftcomp.io.numtext import format_row
@@ -165,6 +183,9 @@ def run(args: argparse.Namespace) -> int:
     _check(args)
     output = check_writable(args.output, overwrite=args.force, inputs=[args.calibration])
     calibration = load_calibration(args.calibration)
+    if args.online_load:
+        require_tool_weight(calibration, args.calibration)
+    columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if args.online_load else RUN_COLUMNS
     settle = SettleRule(args.settle_band_N, args.settle_s) if args.settle_band_N else None
     fault, code = "", 0
     with open_hardware(args) as (robot, sensor, mount):
@@ -172,12 +193,18 @@ def run(args: argparse.Namespace) -> int:
         if take_control is not None and not args.dry_run:
             take_control()  # before the loop: it takes a while (a UR uploads its script)
         controller = _controller(args, robot.control_period_s)
-        cycle = ControlCycle(
-            robot, sensor, mount=mount, compensator=GravityCompensator(calibration)
-        )
+        compensator = GravityCompensator(calibration)
+        load: LoadTracker | None = None
+        if args.online_load:
+            from ftcomp.compensation.online import OnlineLoadCompensator, OnlineSettings
+
+            settings = OnlineSettings(rate_Hz=1.0 / robot.control_period_s)
+            compensator = OnlineLoadCompensator(calibration, settings)  # one call per cycle
+            load = LoadTracker(compensator)
+        cycle = ControlCycle(robot, sensor, mount=mount, compensator=compensator)
         with atomic_output(output) as tmp, tmp.open("w", encoding="utf-8", newline="") as handle:
             writer = csv.writer(handle, lineterminator="\n")
-            writer.writerow(RUN_COLUMNS)
+            writer.writerow(columns)
             rows: list[list[float]] = []
 
             def write_row(row: object) -> None:
@@ -194,6 +221,7 @@ def run(args: argparse.Namespace) -> int:
                 settle=settle,
                 dry_run=args.dry_run,
                 max_late_cycles=args.max_late_cycles,
+                load=load,
             )
             print(
                 f"{'dry run' if args.dry_run else 'running'}: {args.law} admittance on "
@@ -208,8 +236,8 @@ def run(args: argparse.Namespace) -> int:
                 fault, code = f"{exc}; the robot was stopped", 1
     if not fault and step.faulted:
         fault, code = f"protective stop: {step.outcome}; the robot was stopped", 1
-    data = np.array(rows).reshape(-1, len(RUN_COLUMNS))
-    col = {name: i for i, name in enumerate(RUN_COLUMNS)}
+    data = np.array(rows).reshape(-1, len(columns))
+    col = {name: i for i, name in enumerate(columns)}
     summary = f"{step.cycles} cycles in {data[-1, 0] if len(data) else 0.0:.2f} s, log {output}"
     if len(data):
         p = data[:, [col["px"], col["py"], col["pz"]]]
@@ -221,6 +249,10 @@ def run(args: argparse.Namespace) -> int:
             f"mean force error over the last {args.settle_s:g} s "
             f"[{error[0]:+.3f} {error[1]:+.3f} {error[2]:+.3f}] N ({args.frame} frame)"
         )
+    if load is not None:
+        rate = load.compensator.settings.rate_Hz
+        print(f"online load: rate {rate:.1f} Hz (1 / the robot's control period)")
+        print("\n".join(event_lines(load.events)))
     if fault:
         print(f"error: {fault}; {summary}", file=sys.stderr)
         return code

@@ -42,7 +42,7 @@ from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 from ftcomp.model import GravityModel, skew
 
-__all__ = ["GraspState", "LoadRls", "OnlineLoadCompensator", "OnlineSettings"]
+__all__ = ["GraspEvent", "GraspState", "LoadRls", "OnlineLoadCompensator", "OnlineSettings"]
 
 
 class GraspState(Enum):
@@ -234,6 +234,12 @@ class OnlineLoadCompensator(GravityCompensator):
     def converged(self) -> bool:
         """Whether a load is held and its estimate is in use."""
         return self.state is GraspState.HOLDING
+
+    @property
+    def confirm_samples(self) -> int:
+        """Calls a step must persist to be confirmed (``confirm_s`` at ``rate_Hz``, at least
+        2): an event's ``sample - onset_sample`` is this minus one."""
+        return self._n_confirm
 
     def load_wrench(self, d_sensor: NDArray[np.float64]) -> NDArray[np.float64]:
         """The load wrench subtracted now, at gravity direction ``d_sensor``, (6,)."""

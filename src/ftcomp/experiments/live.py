@@ -2,14 +2,17 @@
 
 :class:`StreamLogger` (``ftcomp stream``) commands nothing; every cycle it takes every new
 reading (``sensor.read_new``), so the log has the sensor's rate whatever the loop's, and writes
-one row per reading: the raw wrench and, with a compensator and a pose, the contact wrench.
+one row per reading: the raw wrench and, with a compensator and a pose, the contact wrench; with
+a :class:`~ftcomp.experiments.live_load.StreamLoad` (``--online-load``) the contact wrench with
+a grasped load weighed online and removed, and the load estimate.
 
 :class:`CompliantStep` (``ftcomp run``) is the live compliant loop: the controller's step
 (:class:`~ftcomp.control.controller.AdmittanceController`: watchdog, limits, filter, law,
-envelope) on the compensated wrench, one log row per cycle, and the end of the run: its
-duration, a settled contact (the selected axes' filtered force error within a band for a
-while), a protective stop of the controller, or a loop that keeps missing its period. With
-``dry_run`` it computes and logs every command and sends a zero twist instead.
+envelope) on the compensated wrench, one log row per cycle (with a
+:class:`~ftcomp.experiments.live_load.LoadTracker`, the online load estimate too), and the end
+of the run: its duration, a settled contact (the selected axes' filtered force error within a
+band for a while), a protective stop of the controller, or a loop that keeps missing its
+period. With ``dry_run`` it computes and logs every command and sends a zero twist instead.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from ftcomp.control.controller import AdmittanceController, ControllerState
 from ftcomp.control.filters import LowPassFilter
 from ftcomp.control.loop import Reading
 from ftcomp.errors import ParameterError
+from ftcomp.experiments.live_load import LOAD_COLUMNS, LoadTracker, StreamLoad
 from ftcomp.frames import quat_from_matrix
 from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.samples import WRENCH_COLUMNS
@@ -58,13 +62,18 @@ RUN_COLUMNS = (
 )
 
 
-def stream_columns(*, with_pose: bool, compensated: bool) -> tuple[str, ...]:
+def stream_columns(
+    *, with_pose: bool, compensated: bool, online_load: bool = False
+) -> tuple[str, ...]:
     """Columns of ``ftcomp stream``'s log: ``t`` [s, session clock], the raw wrench, with a pose
-    the sensor's orientation (``qx,qy,qz,qw``) and origin (``px,py,pz`` [m], base frame), and
-    when compensating the contact wrench ``cfx..ctz``. With a pose it is a valid sample CSV."""
+    the sensor's orientation (``qx,qy,qz,qw``) and origin (``px,py,pz`` [m], base frame), when
+    compensating the contact wrench ``cfx..ctz``, and with ``online_load`` (compensating) the
+    load estimate (:data:`~ftcomp.experiments.live_load.LOAD_COLUMNS`). With a pose it is a
+    valid sample CSV."""
     pose = ("qx", "qy", "qz", "qw", "px", "py", "pz") if with_pose else ()
-    contact = tuple(f"c{c}" for c in WRENCH_COLUMNS) if compensated else ()
-    return ("t", *WRENCH_COLUMNS, *pose, *contact)
+    contact = tuple(f"c{c}" for c in WRENCH_COLUMNS) if compensated or online_load else ()
+    load = LOAD_COLUMNS if online_load else ()
+    return ("t", *WRENCH_COLUMNS, *pose, *contact, *load)
 
 
 class StreamLogger:
@@ -76,6 +85,9 @@ class StreamLogger:
         duration_s: how long to log [s].
         with_pose: log the sensor's pose (the robot reports one).
         compensator: also log the contact wrench.
+        online: instead of ``compensator``, compensate with a grasped load weighed online, and
+            log its estimate (rows may be held back while it measures the readings' rate:
+            call :meth:`finish` at the end).
     """
 
     def __init__(
@@ -86,11 +98,14 @@ class StreamLogger:
         *,
         with_pose: bool,
         compensator: GravityCompensator | None = None,
+        online: StreamLoad | None = None,
     ) -> None:
         if not (math.isfinite(duration_s) and duration_s > 0.0):
             raise ParameterError(f"the duration must be > 0 s, got {duration_s}")
+        if compensator is not None and online is not None:
+            raise ParameterError("give a compensator or an online load estimate, not both")
         self.sensor, self.write_row, self.with_pose = sensor, write_row, with_pose
-        self.compensator = compensator
+        self.compensator, self.online = compensator, online
         self.duration_ns = round(duration_s * 1e9)
         self.t0_ns: int | None = None
         self.count = 0
@@ -109,16 +124,28 @@ class StreamLogger:
         pose: list[float] = []
         if self.with_pose:
             pose = [*quat_from_matrix(r.R_base_sensor), *r.p_base_sensor.tolist()]
+        online = self.online
         for sample in self.sensor.read_new():
             w = sample.wrench_sensor
             row = [sample.t_ns * 1e-9, *w.tolist(), *pose]
+            self.count += 1
+            if online is not None:
+                for ready in online.push(sample.t_ns, w, r.R_base_sensor, row):
+                    self.write_row(ready)
+                self.contact_force_N = online.contact_force_N
+                continue
             if self.compensator is not None:
                 contact = self.compensator.compensate(w, r.R_base_sensor)
                 row += contact.tolist()
                 self.contact_force_N = float(np.linalg.norm(contact[:3]))
             self.write_row(row)
-            self.count += 1
         return self._zero
+
+    def finish(self) -> None:
+        """Log the rows still held back (the online estimate measuring the rate)."""
+        if self.online is not None:
+            for row in self.online.finish():
+                self.write_row(row)
 
 
 @dataclass(frozen=True)
@@ -145,10 +172,12 @@ class CompliantStep:
         robot: the arm (for its period and, if it paces itself, its missed periods).
         first: the first reading (the controller starts bumpless at its wrench).
         duration_s: the run ends after this long [s].
-        write_row: called with one row of :data:`RUN_COLUMNS` per cycle.
+        write_row: called with one row of :data:`RUN_COLUMNS` per cycle (with ``load``, then
+            :data:`~ftcomp.experiments.live_load.LOAD_COLUMNS`).
         settle: end when the contact has settled (None: run for the whole duration).
         dry_run: compute and log every command but send zero.
         max_late_cycles: this many missed periods in a row end the run (``"overrun"``).
+        load: follows the cycle's online load compensator (its estimate is logged).
     """
 
     def __init__(
@@ -162,6 +191,7 @@ class CompliantStep:
         settle: SettleRule | None = None,
         dry_run: bool = False,
         max_late_cycles: int = 10,
+        load: LoadTracker | None = None,
     ) -> None:
         if not (math.isfinite(duration_s) and duration_s > 0.0):
             raise ParameterError(f"the duration must be > 0 s, got {duration_s}")
@@ -172,6 +202,7 @@ class CompliantStep:
         self.dt = robot.control_period_s
         self.duration_ns = round(duration_s * 1e9)
         self.settle, self.dry_run, self.max_late = settle, dry_run, max_late_cycles
+        self.load = load
         self.state: ControllerState = controller.initial_state(w0, first.R_base_sensor)
         self.t0_ns = first.now_ns
         self.outcome = "duration"
@@ -228,17 +259,19 @@ class CompliantStep:
             self.dt,
         )
         self.cycles += 1
-        self.write_row(
-            [
-                (r.now_ns - self.t0_ns) * 1e-9,
-                *r.wrench_raw_sensor.tolist(),
-                *r.wrench_contact_sensor.tolist(),
-                *error,
-                *twist.tolist(),
-                *r.p_base_sensor.tolist(),
-                0.0 if self.dry_run else 1.0,
-            ]
-        )
+        t_s = (r.now_ns - self.t0_ns) * 1e-9
+        row = [
+            t_s,
+            *r.wrench_raw_sensor.tolist(),
+            *r.wrench_contact_sensor.tolist(),
+            *error,
+            *twist.tolist(),
+            *r.p_base_sensor.tolist(),
+            0.0 if self.dry_run else 1.0,
+        ]
+        if self.load is not None:
+            row += self.load.update(t_s)
+        self.write_row(row)
         if self.state.stop_reason is not None:
             self.outcome = self.state.stop_reason.value
             return None
