@@ -231,3 +231,12 @@ def test_stream_with_the_ur_pose_compensates_the_stand_ins_tool_to_zero(
     assert np.all(np.abs(contact.mean(axis=0)) < 0.05)
     raw = rows[:, header.index("fx") : header.index("fx") + 3].mean(axis=0)
     assert abs(np.linalg.norm(raw - TOOL_MODEL.force_bias_N) - TOOL_MODEL.weight_N) < 0.01
+
+
+def test_stream_on_the_simulated_cell_logs_every_tick_of_the_sensor(tmp_path: Path) -> None:
+    out = tmp_path / "log.csv"
+    argv = ["stream", "--robot", "sim://", "--sensor", "sim://", "--seconds", "0.3", "-o", str(out)]
+    assert main(argv) == 0
+    t = np.genfromtxt(out, delimiter=",", skip_header=1, ndmin=2)[:, 0]
+    assert len(t) >= 0.25 * 1200  # 0.3 s of 1.2 kHz, less the first cycles' start-up
+    np.testing.assert_allclose(np.diff(t), 1 / 1200, rtol=0, atol=2e-9)  # no tick lost

@@ -86,3 +86,24 @@ def test_same_seed_gives_the_same_readings() -> None:
 def test_sensor_spec_rejects_impossible_values(field: str, value: float) -> None:
     with pytest.raises(ParameterError, match=field):
         SensorSpec(**{field: value})
+
+
+def test_a_stream_gets_every_tick_once_also_when_reads_come_between() -> None:
+    # A streaming loop calls read() (the controller's newest sample) and then read_new() (the
+    # log) every 1 ms cycle: the log must still get every 1.2 kHz tick, once, in order, and the
+    # very sample read() returned.
+    clock = [0.0]
+    sensor = _sensor(SensorSpec(), np.array([1.0, 2.0, 3.0, 0.1, 0.2, 0.3]), clock)
+    streamed = sensor.read_new()  # starts the stream with the newest reading
+    seen_by_read = []
+    for k in range(1, 101):
+        clock[0] = k * 1e-3
+        seen_by_read.append(sensor.read())
+        if k % 7 == 0:
+            clock[0] += 0.0004  # a stalled cycle: the log catches up later
+        streamed += sensor.read_new()
+    ticks = np.round(np.array([s.t_ns for s in streamed]) * 1200e-9).astype(int)
+    np.testing.assert_array_equal(ticks, np.arange(ticks[0], ticks[-1] + 1))
+    by_stamp = {s.t_ns: s for s in streamed}
+    assert all(by_stamp[s.t_ns] is s for s in seen_by_read)
+    assert sensor.read_new() == []  # nothing new at the same time

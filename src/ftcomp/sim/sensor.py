@@ -200,6 +200,9 @@ class SimWrenchSensor(NothingToClose):
         self._next = 0
         self._last_tick = -1
         self._last: WrenchSample | None = None
+        # After the first read_new: every tick is kept until read_new hands it out.
+        self._streaming = False
+        self._pending: list[WrenchSample] = []
         self._overloaded = False
         # Hot-path copies (read() runs every control cycle).
         self._bias = spec.bias_6
@@ -300,6 +303,8 @@ class SimWrenchSensor(NothingToClose):
         k = self.tick(self._clock())
         if k == self._last_tick and self._last is not None:
             return self._last
+        if self._streaming and 0 <= self._last_tick < k - 1:  # ticks between two reads
+            self._pending += self._generate(self._last_tick + 1, k - 1)
         if self._next >= len(self._block):
             self._refill()
         ideal = self._ideal()
@@ -334,27 +339,31 @@ class SimWrenchSensor(NothingToClose):
             ]
         self._last_tick = k
         self._last = WrenchSample.owning(self._stamp_ns(k), np.array(x))
+        if self._streaming:
+            self._pending.append(self._last)
         return self._last
 
     def read_new(self) -> list[WrenchSample]:
-        """Every output tick since the previous read, oldest first.
+        """Every output tick since the previous call, oldest first (also the ticks that
+        :meth:`read` has seen meanwhile: the same samples). The first call returns the newest
+        reading alone and starts the stream.
 
         The physics advances one control cycle at a time, so every tick since the last read
         sees the newest physics state (a real sensor sampling a signal held for one cycle).
-        The first call returns the newest reading alone.
         """
-        k = self.tick(self._clock())
-        if self._last is None or self._last_tick < 0:
-            return [self.read()]
-        n = k - self._last_tick
-        if n <= 0:
-            return []
-        first = self._last_tick + 1
+        if not self._streaming:
+            newest = self.read()
+            self._streaming, self._pending = True, []
+            return [newest]
+        self.read()  # every tick up to now into the pending list
+        out, self._pending = self._pending, []
+        return out
+
+    def _generate(self, first: int, last: int) -> list[WrenchSample]:
+        """Readings for ticks ``first .. last`` in order (noise and drift tick by tick)."""
+        n = last - first + 1
         ideal = np.broadcast_to(self._ideal(), (n, 6))
         if self._drifting:  # added as the bias is: after the gain, before noise
             ideal = ideal + self.drift(first, n) / (1.0 + self._spec.gain_error_fraction)
         readings = self.convert(ideal)
-        samples = [WrenchSample(self._stamp_ns(first + i), readings[i]) for i in range(n)]
-        self._last_tick = k
-        self._last = samples[-1]
-        return samples
+        return [WrenchSample(self._stamp_ns(first + i), readings[i]) for i in range(n)]
