@@ -192,3 +192,13 @@ def test_a_held_contact_force_does_not_creep(surface: str) -> None:
     assert before > 0.1, "the load must stay in contact"
     # No-slip iterations and elliptic cones: less than 1 % change over 2 s of holding.
     assert after == pytest.approx(before, rel=0.01)
+
+
+def test_the_first_reading_is_the_tool_at_rest_not_the_arm_starting_to_sag() -> None:
+    from ftcomp.sim import SceneConfig, SimCell
+
+    cell = SimCell(SceneConfig(), seed=0)
+    before = cell.ideal_wrench_sensor().copy()
+    cell.wait_cycle()
+    # At rest from t = 0: the first physics step changes the sensed wrench only by rounding.
+    np.testing.assert_allclose(before, cell.ideal_wrench_sensor(), rtol=0, atol=1e-6)

@@ -129,6 +129,10 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         d.qpos[self._qs] = q0
         d.ctrl[:] = q0
         mujoco.mj_forward(m, d)
+        # With the servo's gravity feedforward in place, as every physics step has it: the
+        # sensor then reads the tool at rest from t = 0, not the arm starting to sag.
+        d.qfrc_applied[self._ds] = d.qfrc_bias[self._ds]
+        mujoco.mj_forward(m, d)
         self._sensor_spec = sensor_spec if sensor_spec is not None else SensorSpec()
         self._sensor = SimWrenchSensor(
             self._sensor_spec, self.ideal_wrench_sensor, self.time, seed=seed
