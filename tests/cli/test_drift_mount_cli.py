@@ -158,3 +158,16 @@ def test_poses_design_count_below_the_minimum_is_one_line_exit_2(tmp_path, capsy
     assert main(["poses", "design", "--count", "2", "-o", str(tmp_path / "p.csv")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "at least 3 poses" in err
+
+
+def test_a_live_stream_says_that_it_does_not_apply_the_drift(tmp_path, capsys) -> None:
+    cal = tmp_path / "cal.json"
+    assert (
+        main(["calibrate", str(_drifting_csv(tmp_path)), "--bias-drift", "linear", "-o", str(cal)])
+        == 0
+    )
+    capsys.readouterr()
+    out = tmp_path / "log.csv"
+    argv = ["stream", "--robot", "sim://", "--sensor", "sim://", "-c", str(cal)]
+    assert main([*argv, "--seconds", "0.05", "-o", str(out)]) == 0
+    assert "bias drift model is not applied live" in capsys.readouterr().err

@@ -7,7 +7,7 @@ import math
 import sys
 from collections.abc import Iterable
 
-__all__ = ["add_range_argument", "parse_range", "print_warnings"]
+__all__ = ["add_range_argument", "parse_range", "print_warnings", "warn_live_drift"]
 
 
 def parse_range(text: str) -> tuple[float, float]:
@@ -39,3 +39,15 @@ def add_range_argument(parser: argparse.ArgumentParser) -> None:
         help="sensor range [N],[N·m], e.g. 250,6: a reading beyond it is an error "
         "(default: no check)",
     )
+
+
+def warn_live_drift(calibration: object, path: str) -> None:
+    """Say so when a calibration's bias drift will not be applied by a live loop."""
+    if getattr(calibration, "bias_drift", None) is not None:
+        print_warnings(
+            [
+                f"{path}: the bias drift model is not applied live (its times are the "
+                "recording's clock); the bias at the end of the calibration is used: run "
+                "ftcomp rebias at the start of a session"
+            ]
+        )

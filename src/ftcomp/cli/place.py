@@ -10,6 +10,7 @@ import argparse
 import math
 import sys
 
+from ftcomp.cli.common import warn_live_drift
 from ftcomp.errors import ParameterError
 
 __all__ = ["register"]
@@ -130,6 +131,8 @@ def _run(args: argparse.Namespace) -> int:
     inputs = [args.calibration] if args.calibration is not None else []
     prepare_output_dir(args.out, overwrite=args.force, inputs=inputs)
     given = load_calibration(args.calibration) if args.calibration is not None else None
+    if given is not None:
+        warn_live_drift(given, args.calibration)
     cell = SimPlacementCell(
         args.surface,
         args.load_kg,

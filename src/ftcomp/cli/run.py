@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ftcomp.cli.common import warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.errors import FtcompError, ParameterError
 
@@ -183,6 +184,7 @@ def run(args: argparse.Namespace) -> int:
     _check(args)
     output = check_writable(args.output, overwrite=args.force, inputs=[args.calibration])
     calibration = load_calibration(args.calibration)
+    warn_live_drift(calibration, args.calibration)
     if args.online_load:
         require_tool_weight(calibration, args.calibration)
     columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if args.online_load else RUN_COLUMNS

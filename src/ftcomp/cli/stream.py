@@ -26,6 +26,7 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
+from ftcomp.cli.common import warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import StatusLine
 from ftcomp.errors import FtcompError, ParameterError
@@ -125,6 +126,8 @@ def run(args: argparse.Namespace) -> int:
     inputs = [args.calibration] if args.calibration else []
     output = check_writable(args.output, overwrite=args.force, inputs=inputs)
     calibration = load_calibration(args.calibration) if args.calibration else None
+    if calibration is not None:
+        warn_live_drift(calibration, args.calibration)
     model = calibration.model if calibration is not None else None
     if args.online_load and calibration is not None:
         require_tool_weight(calibration, args.calibration)
