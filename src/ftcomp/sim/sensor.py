@@ -15,6 +15,7 @@ random walk (a temperature-like wander), both functions of the sensor's tick tim
 
 from __future__ import annotations
 
+import collections
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -31,6 +32,8 @@ from ftcomp.hardware.protocols import NothingToClose, WrenchSample
 __all__ = ["SensorSpec", "SimWrenchSensor"]
 
 _NOISE_BLOCK: Final = 4096
+#: Readings a stream keeps for read_new (10 s at the paper's 1.2 kHz).
+_PENDING_MAX: Final = 12_000
 _NS_PER_S: Final = 1_000_000_000
 
 
@@ -200,9 +203,11 @@ class SimWrenchSensor(NothingToClose):
         self._next = 0
         self._last_tick = -1
         self._last: WrenchSample | None = None
-        # After the first read_new: every tick is kept until read_new hands it out.
+        # After the first read_new: every tick is kept until read_new hands it out (the newest
+        # _PENDING_MAX, as a driver's bounded buffer: a loop that stops calling read_new
+        # does not grow it without end).
         self._streaming = False
-        self._pending: list[WrenchSample] = []
+        self._pending: collections.deque[WrenchSample] = collections.deque(maxlen=_PENDING_MAX)
         self._overloaded = False
         # Hot-path copies (read() runs every control cycle).
         self._bias = spec.bias_6
@@ -304,7 +309,7 @@ class SimWrenchSensor(NothingToClose):
         if k == self._last_tick and self._last is not None:
             return self._last
         if self._streaming and 0 <= self._last_tick < k - 1:  # ticks between two reads
-            self._pending += self._generate(self._last_tick + 1, k - 1)
+            self._pending.extend(self._generate(self._last_tick + 1, k - 1))
         if self._next >= len(self._block):
             self._refill()
         ideal = self._ideal()
@@ -353,10 +358,12 @@ class SimWrenchSensor(NothingToClose):
         """
         if not self._streaming:
             newest = self.read()
-            self._streaming, self._pending = True, []
+            self._streaming = True
+            self._pending.clear()
             return [newest]
-        self.read()  # every tick up to now into the pending list
-        out, self._pending = self._pending, []
+        self.read()  # every tick up to now into the pending buffer
+        out = list(self._pending)
+        self._pending.clear()
         return out
 
     def _generate(self, first: int, last: int) -> list[WrenchSample]:
