@@ -136,11 +136,12 @@ class _PlacementStep:
         R = first.R_base_sensor
         self.state = self.controller.initial_state(w0, R)
         self.decision_filter = LowPassFilter(config.decision_cutoff_hz, dt, order=1, channels=1)
+        self.up_f = tuple(up_base.tolist())  # the per-cycle arithmetic is on floats
+        self.p_ref = first.p_base_sensor.tolist()
         f0 = float(-(self.up @ R) @ w0[:3])
         self.decision_state = self.decision_filter.initial_state_scalar(f0)
         self.f_dec = f0
-        self.p_ref = first.p_base_sensor
-        self.p_prev = first.p_base_sensor
+        self.descent_prev = 0.0
         self.t0_ns = first.now_ns
         self.rows: list[tuple[float, ...]] = []
         self.outcome = "timeout"
@@ -150,18 +151,41 @@ class _PlacementStep:
 
     def descent(self, p: NDArray[np.float64]) -> float:
         """How far the sensor has gone down since the start [m]."""
-        return float((self.p_ref - p) @ self.up)
+        (x, y, z), (u0, u1, u2) = self.p_ref, self.up_f
+        p0, p1, p2 = p.tolist()
+        return (x - p0) * u0 + (y - p1) * u1 + (z - p2) * u2
 
-    def log(self, r: Reading, velocity: float, f_filt: float, descent: float | None = None) -> None:
-        """Append one row of :data:`COLUMNS`."""
-        down_sensor = -(self.up @ r.R_base_sensor)  # gravity's direction, sensor frame
+    def forces(self, r: Reading) -> tuple[float, float]:
+        """The raw and the compensated force along gravity [N] (the sign of COLUMNS)."""
+        u0, u1, u2 = self.up_f
+        (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = r.R_base_sensor.tolist()
+        # Gravity's direction in the sensor frame: -(up @ R_base_sensor).
+        d0, d1, d2 = (
+            -(u0 * a0 + u1 * b0 + u2 * c0),
+            -(u0 * a1 + u1 * b1 + u2 * c1),
+            -(u0 * a2 + u1 * b2 + u2 * c2),
+        )
+        w0, w1, w2 = r.wrench_raw_sensor[:3].tolist()
+        f0, f1, f2 = r.wrench_contact_sensor[:3].tolist()
+        return d0 * w0 + d1 * w1 + d2 * w2, d0 * f0 + d1 * f1 + d2 * f2
+
+    def log(
+        self,
+        r: Reading,
+        velocity: float,
+        f_filt: float,
+        descent: float | None = None,
+        forces: tuple[float, float] | None = None,
+    ) -> None:
+        """Append one row of :data:`COLUMNS` (``descent`` and ``forces`` when already known)."""
+        f_raw, f_comp = self.forces(r) if forces is None else forces
         self.rows.append(
             (
                 (r.now_ns - self.t0_ns) * 1e-9,
                 (self.descent(r.p_base_sensor) if descent is None else descent) * 1e3,
                 velocity * 1e3,
-                float(down_sensor @ r.wrench_raw_sensor[:3]),
-                float(down_sensor @ r.wrench_contact_sensor[:3]),
+                f_raw,
+                f_comp,
                 f_filt,
                 self.cell.true_contact_force_N(),
             )
@@ -172,8 +196,8 @@ class _PlacementStep:
         now = r.now_ns * 1e-9
         if now - self.t0_ns * 1e-9 >= config.max_duration_s:
             return None
-        p, R, w_c = r.p_base_sensor, r.R_base_sensor, r.wrench_contact_sensor
-        descent = self.descent(p)
+        R, w_c = r.R_base_sensor, r.wrench_contact_sensor
+        descent = self.descent(r.p_base_sensor)
         nominal = None
         if not self.admittance:
             nominal = self.nominal_down if descent < self.depth_target else self.zero
@@ -187,15 +211,16 @@ class _PlacementStep:
             nominal,
             wrench_raw_sensor=r.wrench_raw_sensor,
         )
-        f_comp = float(-(self.up @ R) @ w_c[:3])
+        forces = self.forces(r)
+        f_comp = forces[1]
         if math.isfinite(f_comp):
             self.decision_state, self.f_dec = self.decision_filter.step_scalar(
                 self.decision_state, f_comp
             )
         f_filt = self.f_dec if math.isfinite(f_comp) else math.nan
-        velocity = float((self.p_prev - p) @ self.up) / self.dt if self.rows else 0.0
-        self.p_prev = p
-        self.log(r, velocity, f_filt, descent)
+        velocity = (descent - self.descent_prev) / self.dt if self.rows else 0.0
+        self.descent_prev = descent
+        self.log(r, velocity, f_filt, descent, forces)
         if self.state.stop_reason is not None:
             self.outcome = self.state.stop_reason.value
             return None
