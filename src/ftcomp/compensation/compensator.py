@@ -50,6 +50,12 @@ class GravityCompensator:
         for i in range(3):
             K[3 * i : 3 * i + 3, :] = self._gravity_base[i] * np.eye(3)
         self._batch_matrix = K @ self._A.T
+        # The single-sample path on floats (a control loop's one call per cycle): g, and
+        # bias + A as rows of floats.
+        self._g = tuple(self._gravity_base.tolist())
+        self._rows = tuple(
+            (b, *a) for b, a in zip(self._bias.tolist(), self._A.tolist(), strict=True)
+        )
         #: Unit vector along gravity, base frame (None for a weightless tool).
         self.gravity_dir_base = (
             self._gravity_base / np.linalg.norm(self._gravity_base) if model.weight_N else None
@@ -81,7 +87,7 @@ class GravityCompensator:
         if w.shape == (6,) and R.shape == (3, 3):
             if t_s is not None and self.bias_drift is not None:
                 w = w - self.bias_drift.offset(t_s)
-            return w - self._bias - self._A @ (self._gravity_base @ R)
+            return self._one(w, R)
         if w.ndim == 2 and w.shape[1] == 6 and R.shape == (len(w), 3, 3):
             if out is None:
                 out = np.empty((len(w), 6))
@@ -97,4 +103,20 @@ class GravityCompensator:
         raise ParameterError(
             "compensate needs wrench_sensor (6,) with R_base_sensor (3, 3), or (N, 6) with "
             f"(N, 3, 3); got {w.shape} and {R.shape}"
+        )
+
+    def _one(self, w: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``w - bias - A @ (g @ R)`` for one sample, on floats."""
+        g0, g1, g2 = self._g
+        (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = R.tolist()
+        s0, s1, s2 = (
+            g0 * a0 + g1 * b0 + g2 * c0,
+            g0 * a1 + g1 * b1 + g2 * c1,
+            g0 * a2 + g1 * b2 + g2 * c2,
+        )
+        return np.array(
+            [
+                x - b - (k0 * s0 + k1 * s1 + k2 * s2)
+                for x, (b, k0, k1, k2) in zip(w.tolist(), self._rows, strict=True)
+            ]
         )

@@ -94,6 +94,7 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         self._ds = slice(int(self._dof_adr[0]), int(self._dof_adr[0]) + 6)
         self._lower = m.jnt_range[joint_ids, 0].copy()
         self._upper = m.jnt_range[joint_ids, 1].copy()
+        self._limits = (self._lower.tolist(), self._upper.tolist())
         self._kv = self._config.arm.kv.copy()
         self._site = m.site(NAMES["ft_site"]).id
         self._sensing_end = m.body(NAMES["sensing_end"]).id
@@ -241,14 +242,19 @@ class SimCell(ArmMotion, GripperAndSurfaces):
 
     def wait_cycle(self) -> None:
         """Advance one control period: differential IK of the commanded twist, then physics."""
-        if self._twist_active:
-            qd = self._dik.joint_velocity(self._data, self._twist_world)[:6]
-            peak = float(np.abs(qd).max())
+        if self._twist_active:  # on floats: six joints, where numpy calls cost the most
+            qd = self._dik.joint_velocity(self._data, self._twist_world)[:6].tolist()
+            peak = max(map(abs, qd))
             if peak > _MAX_JOINT_SPEED:
-                qd = qd * (_MAX_JOINT_SPEED / peak)
-            q = np.minimum(np.maximum(self._q_cmd + qd * self._period, self._lower), self._upper)
-            self._qd_cmd = (q - self._q_cmd) * self._rate
-            self._q_cmd = q
+                qd = [v * (_MAX_JOINT_SPEED / peak) for v in qd]
+            dt, rate = self._period, self._rate
+            q_old = self._q_cmd.tolist()
+            q = [
+                min(max(a + v * dt, lo), hi)
+                for a, v, lo, hi in zip(q_old, qd, *self._limits, strict=True)
+            ]
+            self._qd_cmd = np.array([(b - a) * rate for a, b in zip(q_old, q, strict=True)])
+            self._q_cmd = np.array(q)
         self._physics()
 
     # ----------------------------------------------------------------- physics and sensing
