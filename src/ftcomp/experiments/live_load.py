@@ -127,20 +127,10 @@ def event_lines(events: list[LoadEvent], *, limit: int = 20) -> list[str]:
 
 
 def _estimate_columns(rls: LoadRls) -> list[float]:
-    """``load_kg .. load_c_std_m`` of an estimate: the centre's standard deviations are the
-    diagonal of ``J C J'`` with ``J = [-c / m, I / m]`` (as ``LoadRls.cog_covariance``), on
-    floats (the 1 kHz path)."""
-    C = rls.covariance.tolist()
-    m, m1, m2, m3 = rls.theta.tolist()
-    std = math.sqrt(C[0][0])
-    if abs(m) <= 1e-9:
-        return [m, std, 0.0, 0.0, 0.0, math.inf]
-    c = (m1 / m, m2 / m, m3 / m)
-    var = max(
-        (C[i + 1][i + 1] - 2.0 * c[i] * C[0][i + 1] + c[i] * c[i] * C[0][0]) / (m * m)
-        for i in range(3)
-    )
-    return [m, std, *c, math.sqrt(max(var, 0.0))]
+    """``load_kg .. load_c_std_m`` of an estimate (the largest of the centre's three standard
+    deviations; infinite before any mass is seen)."""
+    c_std = math.sqrt(max(float(np.max(np.diag(rls.cog_covariance))), 0.0))
+    return [rls.mass_kg, rls.mass_std_kg, *rls.cog_m.tolist(), c_std]
 
 
 class LoadTracker:
