@@ -27,6 +27,7 @@ class StatusLine:
         total_s: the planned duration [s].
         stream: where to write (stderr).
         period_s: how often to refresh [s].
+        extra: more to show at the end (e.g. the online load), "" for nothing.
     """
 
     def __init__(
@@ -39,8 +40,9 @@ class StatusLine:
         *,
         stream: TextIO | None = None,
         period_s: float = 0.25,
+        extra: Callable[[], str] | None = None,
     ) -> None:
-        self.count, self.lost, self.force_N = count, lost, force_N
+        self.count, self.lost, self.force_N, self.extra = count, lost, force_N, extra
         self.elapsed_s, self.total_s = elapsed_s, total_s
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = self.stream.isatty()
@@ -58,7 +60,8 @@ class StatusLine:
         if math.isfinite(force):
             parts.append(f"|F| {force:.3f} N")
         parts.append(f"{self.elapsed_s():.1f} / {self.total_s:g} s")
-        return " | ".join(parts)
+        more = self.extra() if self.extra is not None else ""
+        return " | ".join([*parts, more] if more else parts)
 
     def __call__(self, *_: object) -> None:
         """Refresh when due (a sink: arguments ignored)."""

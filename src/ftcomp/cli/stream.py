@@ -23,8 +23,6 @@ import argparse
 import csv
 import math
 import sys
-from collections.abc import Callable
-from typing import Any
 
 from ftcomp.cli.common import warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
@@ -69,19 +67,6 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
     parser.set_defaults(handler=run)
-
-
-class _LoadStatusLine(StatusLine):
-    """The status line with the online load estimate (``| load 0.500 ± 0.001 kg``)."""
-
-    def __init__(self, *args: Any, load_text: Callable[[], str], **kwargs: Any) -> None:
-        super().__init__(*args, **kwargs)
-        self.load_text = load_text
-
-    def text(self, rate_hz: float) -> str:
-        """The line, with the load when one is held."""
-        extra = self.load_text()
-        return super().text(rate_hz) + (f" | {extra}" if extra else "")
 
 
 def _check_online(args: argparse.Namespace) -> None:
@@ -150,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
         online = None
         if args.online_load and calibration is not None:
             online = StreamLoad(calibration, args.online_rate_hz)
-            compensator = None  # the logger compensates each reading; the cycle need not
+            compensator = None
         with atomic_output(output) as tmp, tmp.open("w", encoding="utf-8", newline="") as handle:
             writer = csv.writer(handle, lineterminator="\n")
             writer.writerow(
@@ -173,15 +158,15 @@ def run(args: argparse.Namespace) -> int:
                 online=online,
             )
             lost = sensor.lost_packets if isinstance(sensor, CountsLostPackets) else None
-            status = _LoadStatusLine(
+            status = StatusLine(
                 lambda: logger.count,
                 (lambda: sensor.lost_packets) if lost is not None else None,  # type: ignore[attr-defined]
                 lambda: logger.contact_force_N,
                 lambda: logger.elapsed_s,
                 args.seconds,
-                load_text=online.status_text if online is not None else lambda: "",
+                extra=online.status_text if online is not None else None,
             )
-            cycle = ControlCycle(robot, sensor, mount=mount, compensator=compensator)
+            cycle = ControlCycle(robot, sensor, mount=mount)  # the logger compensates
             try:
                 run_loop(cycle, logger, sinks=[status])
             except EndOfReplayError:
