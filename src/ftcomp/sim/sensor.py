@@ -212,12 +212,14 @@ class SimWrenchSensor(NothingToClose):
         # Hot-path copies (read() runs every control cycle).
         self._bias = spec.bias_6
         self._std = spec.noise_std_6
-        self._step = spec.step_6 if spec.resolution_fraction_of_range > 0.0 else None
         self._range = spec.range_6
         self._range_ft = (spec.force_range_N, spec.torque_range_Nm)
         # (step, 1 / step) per axis as floats, or None without quantisation.
+        step = spec.step_6
         self._quantum: tuple[list[float], list[float]] | None = (
-            None if self._step is None else (self._step.tolist(), (1.0 / self._step).tolist())
+            (step.tolist(), (1.0 / step).tolist())
+            if spec.resolution_fraction_of_range > 0.0
+            else None
         )
         self._offsets: list[list[float]] = []
         self._overload = spec.overload_6
