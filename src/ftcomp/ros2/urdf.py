@@ -5,10 +5,11 @@ Python on numpy, no ROS needed, and explicit about its conventions (a joint's ``
 child-to-parent transform with fixed-axis roll-pitch-yaw; the ``<axis>`` is in the joint frame),
 the same parser its :class:`~pytransform3d.urdf.UrdfTransformManager` uses. That manager computes
 one configuration at a time (about 0.3 ms for a six-joint arm); a bag holds tens of thousands of
-readings, so :class:`UrdfChain` composes the parsed joints of the chain for every reading at once
-with the same formula (``T_parent_child = child2parent @ joint_motion(q)``); the tests check it
-against ``UrdfTransformManager.get_transform``. :meth:`UrdfChain.pose_and_jacobian` does one
-configuration with its geometric Jacobian, for inverse kinematics (:mod:`.urdf_ik`).
+readings, so :class:`UrdfChain` walks the chain for every reading at once with the same formula
+(``T_parent_child = child2parent @ joint_motion(q)``, fixed joints merged, Rodrigues for the
+motion); the tests check it against ``UrdfTransformManager.get_transform``. The same walk gives
+:meth:`UrdfChain.pose_and_jacobian` (one configuration and its geometric Jacobian, for inverse
+kinematics: :mod:`.urdf_ik`).
 
 Joint positions are interpolated linearly to each reading's stamp (per joint, over the messages
 that name it); a stamp outside the recorded span has no pose.
@@ -16,7 +17,6 @@ that name it); a stamp outside the recorded span has no pose.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeAlias
 
@@ -169,35 +169,6 @@ class UrdfChain:
         frames = ancestry[: ancestry.index(ancestor)]
         return [self._parent_joint[f] for f in reversed(frames)]
 
-    def _compose(
-        self, joints: list[Joint], q: dict[str, NDArray[np.float64]], n: int
-    ) -> NDArray[np.float64]:
-        T = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
-        for joint in joints:
-            motion = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
-            if joint.joint_type in ("revolute", "continuous"):
-                axis = np.asarray(joint.joint_axis, dtype=float)
-                axis = axis / np.linalg.norm(axis)
-                rotvec = q[str(joint.joint_name)][:, None] * axis
-                motion[:, :3, :3] = Rotation.from_rotvec(rotvec).as_matrix()
-            elif joint.joint_type == "prismatic":
-                axis = np.asarray(joint.joint_axis, dtype=float)
-                motion[:, :3, 3] = q[str(joint.joint_name)][:, None] * (axis / np.linalg.norm(axis))
-            T = T @ (np.asarray(joint.child2parent, dtype=float) @ motion)
-        return T
-
-    def forward(self, q: dict[str, NDArray[np.float64]], n: int) -> NDArray[np.float64]:
-        """``T_base_sensor`` (n, 4, 4) for joint positions ``q[name]`` (n,) [rad or m]."""
-        T_top_base = self._compose(self._down_to_base, q, n)
-        T_top_sensor = self._compose(self._down_to_sensor, q, n)
-        R_tb = T_top_base[:, :3, :3]
-        T = np.empty_like(T_top_sensor)
-        T[:, :3, :3] = np.swapaxes(R_tb, 1, 2) @ T_top_sensor[:, :3, :3]
-        delta = T_top_sensor[:, :3, 3] - T_top_base[:, :3, 3]
-        T[:, :3, 3] = np.einsum("nji,nj->ni", R_tb, delta)
-        T[:, 3] = (0.0, 0.0, 0.0, 1.0)
-        return T
-
     @staticmethod
     def _steps(joints: list[Joint]) -> list[_Step]:
         """The chain prepared for :meth:`_walk`: fixed transforms merged into the next joint's."""
@@ -221,24 +192,51 @@ class UrdfChain:
     def _walk(
         steps: list[_Step], q: NDArray[np.float64]
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """One configuration down a chain: the end frame (4, 4), and each movable joint's unit
-        axis and origin (k, 3), all in the top frame."""
-        R, p = np.eye(3), np.zeros(3)
-        axes = np.empty((len(steps) - 1, 3))
-        origins = np.empty((len(steps) - 1, 3))
+        """Configurations ``q`` (n, k) down a chain: the end frames (n, 4, 4), and each movable
+        joint's unit axis and origin (n, k, 3), all in the top frame."""
+        n = len(q)
+        R = np.broadcast_to(_I3, (n, 3, 3))
+        p = np.zeros((n, 3))
+        axes = np.empty((n, len(steps) - 1, 3))
+        origins = np.empty((n, len(steps) - 1, 3))
         for k, (fixed_R, fixed_p, axis, K, K2, prismatic) in enumerate(steps[:-1]):
             p = p + R @ fixed_p
             R = R @ fixed_R
-            axes[k] = R @ axis
-            origins[k] = p
+            axes[:, k] = R @ axis
+            origins[:, k] = p
             if prismatic:
-                p = p + q[k] * axes[k]
+                p = p + q[:, k, None] * axes[:, k]
             else:  # Rodrigues: exp(q [axis]x)
-                R = R @ (_I3 + math.sin(q[k]) * K + (1.0 - math.cos(q[k])) * K2)
-        T = np.eye(4)
-        T[:3, 3] = p + R @ steps[-1][1]
-        T[:3, :3] = R @ steps[-1][0]
+                sin, cos = np.sin(q[:, k])[:, None, None], np.cos(q[:, k])[:, None, None]
+                R = R @ (_I3 + sin * K + (1.0 - cos) * K2)
+        T = np.broadcast_to(np.eye(4), (n, 4, 4)).copy()
+        T[:, :3, 3] = p + R @ steps[-1][1]
+        T[:, :3, :3] = R @ steps[-1][0]
         return T, axes, origins
+
+    def _kinematics(
+        self, q: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """For configurations ``q`` (n, joints): ``T_base_sensor`` (n, 4, 4), and each movable
+        joint's axis (n, 3, joints) and origin (n, 3, joints) in the base frame, the base's
+        joints' axes reversed (moving one moves the base)."""
+        T_top_base, axes_b, origins_b = self._walk(self._steps_base, q[:, : self._n_base])
+        T_top_tip, axes_t, origins_t = self._walk(self._steps_sensor, q[:, self._n_base :])
+        R_base_top = np.swapaxes(T_top_base[:, :3, :3], 1, 2)
+        p_top_base = T_top_base[:, :3, 3, None]
+        T = np.broadcast_to(np.eye(4), T_top_tip.shape).copy()
+        T[:, :3, :3] = R_base_top @ T_top_tip[:, :3, :3]
+        T[:, :3, 3] = (R_base_top @ (T_top_tip[:, :3, 3, None] - p_top_base))[:, :, 0]
+        a = R_base_top @ np.concatenate([-axes_b, axes_t], axis=1).transpose(0, 2, 1)
+        o = np.concatenate([origins_b, origins_t], axis=1).transpose(0, 2, 1)
+        return T, a, R_base_top @ (o - p_top_base)
+
+    def forward(self, q: dict[str, NDArray[np.float64]], n: int) -> NDArray[np.float64]:
+        """``T_base_sensor`` (n, 4, 4) for joint positions ``q[name]`` (n,) [rad or m]."""
+        x = np.zeros((n, len(self.joint_names)))
+        for k, name in enumerate(self.joint_names):
+            x[:, k] = q[name]
+        return self._kinematics(x)[0]
 
     def pose_and_jacobian(
         self, q: NDArray[np.float64]
@@ -253,28 +251,10 @@ class UrdfChain:
             the angular velocity, both in the base frame. A joint between the common ancestor and
             the base moves the base, so it enters with the opposite sign.
         """
-        T, J, _ = self._kinematics(q)
-        return T, J
-
-    def joint_origins(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Each movable joint's origin in the base frame [m] at configuration ``q``, (n, 3)."""
-        return self._kinematics(q)[2]
-
-    def _kinematics(
-        self, q: NDArray[np.float64]
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        q = np.asarray(q, dtype=float)
-        T_top_base, axes_b, origins_b = self._walk(self._steps_base, q[: self._n_base])
-        T_top_tip, axes_t, origins_t = self._walk(self._steps_sensor, q[self._n_base :])
-        R_base_top = T_top_base[:3, :3].T
-        p_top_base = T_top_base[:3, 3]
-        T = np.eye(4)
-        T[:3, :3] = R_base_top @ T_top_tip[:3, :3]
-        T[:3, 3] = p = R_base_top @ (T_top_tip[:3, 3] - p_top_base)
+        T, a, o = self._kinematics(np.asarray(q, dtype=float).reshape(1, -1))
+        T, a, o = T[0], a[0], o[0]
+        r = T[:3, 3, None] - o
         J = np.empty((6, len(self.joint_names)))
-        a = R_base_top @ np.hstack([-axes_b.T, axes_t.T])  # (3, n), base frame
-        o = R_base_top @ (np.hstack([origins_b.T, origins_t.T]) - p_top_base[:, None])
-        r = p[:, None] - o
         J[0] = a[1] * r[2] - a[2] * r[1]  # a x r: a revolute joint's velocity at the tip
         J[1] = a[2] * r[0] - a[0] * r[2]
         J[2] = a[0] * r[1] - a[1] * r[0]
@@ -282,7 +262,11 @@ class UrdfChain:
         if self._prismatic.any():
             J[:3, self._prismatic] = a[:, self._prismatic]
             J[3:, self._prismatic] = 0.0
-        return T, J, o.T
+        return T, J
+
+    def joint_origins(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Each movable joint's origin in the base frame [m] at configuration ``q``, (n, 3)."""
+        return self._kinematics(np.asarray(q, dtype=float).reshape(1, -1))[2][0].T
 
     def sensor_poses(
         self, states: JointStates, t_ns: NDArray[np.int64], source: str
