@@ -22,23 +22,20 @@ with the gripper empty: a load held from the start is no step and counts as cont
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import sys
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from ftcomp.cli.common import warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
-from ftcomp.errors import FtcompError, ParameterError
+from ftcomp.errors import ParameterError
 
 if TYPE_CHECKING:
-    from ftcomp.control.controller import AdmittanceController
-    from ftcomp.control.laws import AdmittanceLaw
+    from ftcomp.session.run import RunConfig
 
 __all__ = ["register", "run"]
 
+#: The admittance laws (ftcomp.session.run.LAWS, here so --help needs no numpy; a test checks).
 _LAWS = ("combined", "position", "velocity", "mass-damper-spring")
 
 
@@ -128,25 +125,14 @@ def _check(args: argparse.Namespace) -> None:
         raise ParameterError(f"--max-late-cycles must be >= 1, got {args.max_late_cycles}")
 
 
-def _controller(args: argparse.Namespace, period_s: float) -> AdmittanceController:
-    from ftcomp.control.controller import AdmittanceController
-    from ftcomp.control.filters import LowPassFilter
-    from ftcomp.control.laws import CombinedLaw, PositionLaw, VelocityLaw, selection_matrix
-    from ftcomp.control.mass_damper_spring import MassDamperSpringLaw
-    from ftcomp.control.safety import SafetyLimits
+def _config(args: argparse.Namespace) -> RunConfig:
+    """The run's configuration from the arguments, in SI units."""
+    import numpy as np
 
-    S = selection_matrix(args.axes)
-    k1 = np.array([args.k1 * 1e-3] * 3 + [math.radians(args.k1_rot)] * 3)
-    k2 = np.array([args.k2 * 1e-3] * 3 + [math.radians(args.k2_rot)] * 3)
-    law: AdmittanceLaw
-    if args.law == "combined":
-        law = CombinedLaw(k1, k2, S)
-    elif args.law == "position":
-        law = PositionLaw(k1, S)
-    elif args.law == "velocity":
-        law = VelocityLaw(k2, S)
-    else:
-        law = MassDamperSpringLaw(args.mass_kg, args.damping, args.stiffness, S)
+    from ftcomp.control.safety import SafetyLimits
+    from ftcomp.session.compliant import SettleRule
+    from ftcomp.session.run import AdmittanceConfig, RunConfig
+
     travel, rotation = args.max_travel_mm * 1e-3, math.radians(args.max_rotation_deg)
     limits = SafetyLimits(
         max_twist=np.array([args.max_speed_mm_s * 1e-3] * 3 + [0.5] * 3),
@@ -157,106 +143,66 @@ def _controller(args: argparse.Namespace, period_s: float) -> AdmittanceControll
         stale_after_s=args.stale_ms * 1e-3,
         max_repeated_samples=2,
     )
-    return AdmittanceController(
-        law=law,
-        wrench_filter=LowPassFilter(args.filter_hz, period_s),
-        limits=limits,
+    admittance = AdmittanceConfig(
+        limits,
+        law=args.law,
+        axes=args.axes,
         frame=args.frame,
-        wrench_desired=np.array(args.wrench_desired),
+        k1=(args.k1 * 1e-3,) * 3 + (math.radians(args.k1_rot),) * 3,
+        k2=(args.k2 * 1e-3,) * 3 + (math.radians(args.k2_rot),) * 3,
+        mass=(args.mass_kg,) * 6,
+        damping=(args.damping,) * 6,
+        stiffness=(args.stiffness,) * 6,
+        wrench_desired=tuple(args.wrench_desired),
+        filter_hz=args.filter_hz,
+    )
+    settle = SettleRule(args.settle_band_N, args.settle_s) if args.settle_band_N else None
+    return RunConfig(
+        admittance,
+        duration_s=args.seconds,
+        settle=settle,
+        dry_run=args.dry_run,
+        max_late_cycles=args.max_late_cycles,
+        online_load=args.online_load,
     )
 
 
 def run(args: argparse.Namespace) -> int:
-    """Open, run the loop, report."""
-    from ftcomp.compensation.compensator import GravityCompensator
-    from ftcomp.control.loop import ControlCycle, run_loop
-    from ftcomp.experiments.live import RUN_COLUMNS, CompliantStep, SettleRule
-    from ftcomp.experiments.live_load import (
-        LOAD_COLUMNS,
-        LoadTracker,
-        event_lines,
-        require_tool_weight,
-    )
-    from ftcomp.io.atomic import atomic_output, check_writable
+    """Open, run, report."""
+    from ftcomp.io.atomic import check_writable
     from ftcomp.io.calibration_json import load_calibration
-    from ftcomp.io.numtext import format_row
+    from ftcomp.session.online_load import event_lines
+    from ftcomp.session.run import run_compliant
 
     _check(args)
+    config = _config(args)
     output = check_writable(args.output, overwrite=args.force, inputs=[args.calibration])
     calibration = load_calibration(args.calibration)
     warn_live_drift(calibration, args.calibration)
-    if args.online_load:
-        require_tool_weight(calibration, args.calibration)
-    columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if args.online_load else RUN_COLUMNS
-    settle = SettleRule(args.settle_band_N, args.settle_s) if args.settle_band_N else None
-    fault, code = "", 0
     with open_hardware(args) as (robot, sensor, mount):
-        take_control = getattr(robot, "connect_control", None)
-        if take_control is not None and not args.dry_run:
-            take_control()  # before the loop: it takes a while (a UR uploads its script)
-        controller = _controller(args, robot.control_period_s)
-        compensator = GravityCompensator(calibration)
-        load: LoadTracker | None = None
-        if args.online_load:
-            from ftcomp.compensation.online import OnlineLoadCompensator, OnlineSettings
-
-            settings = OnlineSettings(rate_Hz=1.0 / robot.control_period_s)
-            compensator = OnlineLoadCompensator(calibration, settings)  # one call per cycle
-            load = LoadTracker(compensator)
-        cycle = ControlCycle(robot, sensor, mount=mount, compensator=compensator)
-        with atomic_output(output) as tmp, tmp.open("w", encoding="utf-8", newline="") as handle:
-            writer = csv.writer(handle, lineterminator="\n")
-            writer.writerow(columns)
-            rows: list[list[float]] = []
-
-            def write_row(row: object) -> None:
-                values = list(row)  # type: ignore[call-overload]
-                rows.append(values)
-                writer.writerow(format_row(values))
-
-            step = CompliantStep(
-                controller,
-                robot,
-                cycle.read(),
-                args.seconds,
-                write_row,
-                settle=settle,
-                dry_run=args.dry_run,
-                max_late_cycles=args.max_late_cycles,
-                load=load,
-            )
-            print(
-                f"{'dry run' if args.dry_run else 'running'}: {args.law} admittance on "
-                f"{args.axes} ({args.frame} frame), calibration {args.calibration}",
-                flush=True,
-            )
-            try:
-                run_loop(cycle, step)
-            except KeyboardInterrupt:
-                fault, code = "interrupted (Ctrl-C); the robot was stopped", 130
-            except FtcompError as exc:
-                fault, code = f"{exc}; the robot was stopped", 1
-    if not fault and step.faulted:
-        fault, code = f"protective stop: {step.outcome}; the robot was stopped", 1
-    data = np.array(rows).reshape(-1, len(columns))
-    col = {name: i for i, name in enumerate(columns)}
-    summary = f"{step.cycles} cycles in {data[-1, 0] if len(data) else 0.0:.2f} s, log {output}"
-    if len(data):
-        p = data[:, [col["px"], col["py"], col["pz"]]]
-        travel_mm = (p[-1] - p[0]) * 1e3
-        last = data[data[:, 0] >= data[-1, 0] - args.settle_s]
-        error = np.nanmean(last[:, [col["ex"], col["ey"], col["ez"]]], axis=0)
-        summary += (
-            f"; travel [{travel_mm[0]:+.2f} {travel_mm[1]:+.2f} {travel_mm[2]:+.2f}] mm, "
-            f"mean force error over the last {args.settle_s:g} s "
-            f"[{error[0]:+.3f} {error[1]:+.3f} {error[2]:+.3f}] N ({args.frame} frame)"
+        print(
+            f"{'dry run' if args.dry_run else 'running'}: {args.law} admittance on "
+            f"{args.axes} ({args.frame} frame), calibration {args.calibration}",
+            flush=True,
         )
-    if load is not None:
-        rate = load.compensator.settings.rate_Hz
-        print(f"online load: rate {rate:.1f} Hz (1 / the robot's control period)")
-        print("\n".join(event_lines(load.events)))
-    if fault:
-        print(f"error: {fault}; {summary}", file=sys.stderr)
+        result = run_compliant(
+            robot, sensor, calibration, config, output, mount=mount, source=args.calibration
+        )
+    summary = f"{result.cycles} cycles in {result.duration_s:.2f} s, log {output}"
+    if result.cycles:
+        t, e, window = result.travel_m * 1e3, result.final_error, config.settle
+        window_s = window.hold_s if window is not None else 0.3
+        summary += (
+            f"; travel [{t[0]:+.2f} {t[1]:+.2f} {t[2]:+.2f}] mm, "
+            f"mean force error over the last {window_s:g} s "
+            f"[{e[0]:+.3f} {e[1]:+.3f} {e[2]:+.3f}] N ({args.frame} frame)"
+        )
+    if config.online_load:
+        print(f"online load: rate {1.0 / result.period_s:.1f} Hz (1 / the robot's control period)")
+        print("\n".join(event_lines(list(result.load_events))))
+    if result.faulted:
+        code = 130 if result.outcome == "interrupted" else 1
+        print(f"error: {result.message}; the robot was stopped; {summary}", file=sys.stderr)
         return code
-    print(f"{step.outcome}: {summary}")
+    print(f"{result.outcome}: {summary}")
     return 0

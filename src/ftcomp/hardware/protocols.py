@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from types import TracebackType
-from typing import Protocol, Self, TypeVar, runtime_checkable
+from typing import Any, Protocol, Self, TypeVar, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -303,3 +303,25 @@ def seconds_to_ns(t_s: float) -> int:
     if not math.isfinite(t_s):
         raise ParameterError(f"a time stamp must be finite, got {t_s}")
     return round(t_s * _NS_PER_S)
+
+
+# TEMPORARY (lead's worktree): replaced by the protocols helper's definitions at merge.
+@runtime_checkable
+class TakesControl(Protocol):
+    def connect_control(self) -> None: ...
+
+
+@runtime_checkable
+class ReportsLateness(Protocol):
+    @property
+    def late_in_a_row(self) -> int: ...
+
+
+@runtime_checkable
+class ReportsStreamHealth(Protocol):
+    def stream_health(self) -> dict[str, Any]: ...
+
+
+@runtime_checkable
+class KnowsPose(Protocol):
+    pose_known: bool

@@ -38,6 +38,7 @@ __all__ = [
     "LoadEvent",
     "LoadTracker",
     "StreamLoad",
+    "estimate_columns",
     "event_lines",
     "require_tool_weight",
 ]
@@ -126,7 +127,7 @@ def event_lines(events: list[LoadEvent], *, limit: int = 20) -> list[str]:
     return lines
 
 
-def _estimate_columns(rls: LoadRls) -> list[float]:
+def estimate_columns(rls: LoadRls) -> list[float]:
     """``load_kg .. load_c_std_m`` of an estimate (the largest of the centre's three standard
     deviations; infinite before any mass is seen)."""
     c_std = math.sqrt(max(float(np.max(np.diag(rls.cog_covariance))), 0.0))
@@ -186,7 +187,7 @@ class LoadTracker:
         rls = c.rls
         if rls.samples != self._rls_samples or c.state is not self._state:
             self._rls_samples, self._state = rls.samples, c.state
-            self.columns = [float(LOAD_STATE_CODES[c.state]), *_estimate_columns(rls)]
+            self.columns = [float(LOAD_STATE_CODES[c.state]), *estimate_columns(rls)]
         mass, std = self.columns[1], self.columns[2]
         converged = self._estimate[2] or c.state is GraspState.HOLDING
         self._estimate = (mass, std, converged)

@@ -1,0 +1,377 @@
+"""A compliant run on a live cell: ``ftcomp run`` as one library call.
+
+:func:`run_compliant` opens nothing: it takes an entered robot and sensor, the calibration, a
+:class:`RunConfig` and the log's path, runs :class:`~ftcomp.session.compliant.CompliantStep` in
+the package's one loop (:func:`~ftcomp.control.loop.run_loop`: on any exit the robot is stopped
+first) and returns a :class:`RunResult`: why it ended, the cycles, the travel, the force error at
+the end, the online load's events.
+
+Each cycle: read, compensate (bias and tool gravity of the calibration; with ``online_load`` a
+grasped load weighed online too), the admittance controller on the selected axes (its law, the
+safety envelope, the sample watchdog), then the twist to the robot; one log row per cycle
+(:data:`RUN_COLUMNS`). The log carries every input of the controller's step (the sample's stamp,
+the contact and raw wrench, the orientation) at full precision and the error it acted on, so it
+replays through the step to the same commands.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ftcomp.calibration.identify import Calibration
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.control.controller import AdmittanceController, ControlFrame
+from ftcomp.control.filters import LowPassFilter
+from ftcomp.control.laws import (
+    AdmittanceLaw,
+    CombinedLaw,
+    PositionLaw,
+    VelocityLaw,
+    selection_matrix,
+)
+from ftcomp.control.loop import ControlCycle, run_loop
+from ftcomp.control.mass_damper_spring import MassDamperSpringLaw
+from ftcomp.control.safety import SafetyLimits
+from ftcomp.errors import FtcompError, ParameterError
+from ftcomp.frames import quat_from_matrix
+from ftcomp.hardware.protocols import Mount, Robot, TakesControl, WrenchSensor
+from ftcomp.model import GravityModel
+from ftcomp.samples import WRENCH_COLUMNS
+from ftcomp.session.compliant import CompliantStep, CycleRecord, SettleRule
+from ftcomp.session.log import csv_log
+from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, LoadTracker, require_tool_weight
+
+__all__ = [
+    "LAWS",
+    "RUN_COLUMNS",
+    "AdmittanceConfig",
+    "LawName",
+    "RunConfig",
+    "RunResult",
+    "run_compliant",
+]
+
+LawName = Literal["combined", "position", "velocity", "mass-damper-spring"]
+
+#: The admittance laws a run can use.
+LAWS: tuple[LawName, ...] = ("combined", "position", "velocity", "mass-damper-spring")
+
+#: Columns of a run's log: the cycle's time and the sample's stamp since the start [s], the raw
+#: and contact wrench (sensor frame), the sensor's orientation (``qx,qy,qz,qw``) and origin
+#: (base frame, [m]), the wrench error the controller acted on (control frame, after its
+#: filter), the commanded sensor-origin twist (base frame) and whether it was sent (0 in a dry
+#: run). Numbers are written with 17 significant digits (exact).
+RUN_COLUMNS = (
+    "t_s",
+    "t_sample_s",
+    *WRENCH_COLUMNS,
+    *(f"c{c}" for c in WRENCH_COLUMNS),
+    "qx",
+    "qy",
+    "qz",
+    "qw",
+    "px",
+    "py",
+    "pz",
+    "ex",
+    "ey",
+    "ez",
+    "etx",
+    "ety",
+    "etz",
+    "vx",
+    "vy",
+    "vz",
+    "wx",
+    "wy",
+    "wz",
+    "sent",
+)
+
+
+def _vector6(name: str, value: object, *, positive: bool) -> tuple[float, ...]:
+    arr = np.asarray(value, dtype=float).reshape(-1)
+    if arr.shape != (6,) or not np.all(np.isfinite(arr)):
+        raise ParameterError(f"{name} needs six finite values, got {arr.tolist()}")
+    if np.any(arr <= 0.0 if positive else arr < 0.0):
+        raise ParameterError(f"{name} must be {'>' if positive else '>='} 0, got {arr.tolist()}")
+    return tuple(arr.tolist())
+
+
+@dataclass(frozen=True)
+class AdmittanceConfig:
+    """The admittance controller of a run, in SI units (see :mod:`ftcomp.control.laws`).
+
+    Attributes:
+        limits: the safety envelope (base-frame axes).
+        law: which law (:data:`LAWS`).
+        axes: the axes that yield to force (``"z"``, ``"x,y,z,rz"``).
+        frame: the frame of ``axes``, the gains and ``wrench_desired``: ``"base"`` or
+            ``"sensor"``.
+        k1: K1 per axis [m/N on x, y, z; rad/(N*m) on rx, ry, rz], >= 0.
+        k2: K2 per axis [m/(s*N); rad/(s*N*m)], >= 0.
+        mass: the mass-damper-spring M per axis [kg; kg*m^2], > 0.
+        damping: its D [N*s/m; N*m*s/rad], >= 0.
+        stiffness: its K [N/m; N*m/rad], >= 0 (0: free).
+        wrench_desired: F0 [N, N*m] in the control frame.
+        filter_hz: the low-pass on the contact wrench [Hz], > 0.
+    """
+
+    limits: SafetyLimits
+    law: LawName = "combined"
+    axes: str = "z"
+    frame: ControlFrame = "base"
+    k1: tuple[float, ...] = (1e-4, 1e-4, 1e-4, 0.0, 0.0, 0.0)
+    k2: tuple[float, ...] = (1e-3, 1e-3, 1e-3, 0.0, 0.0, 0.0)
+    mass: tuple[float, ...] = (2.0,) * 6
+    damping: tuple[float, ...] = (200.0,) * 6
+    stiffness: tuple[float, ...] = (0.0,) * 6
+    wrench_desired: tuple[float, ...] = (0.0,) * 6
+    filter_hz: float = 20.0
+
+    def __post_init__(self) -> None:
+        if self.law not in LAWS:
+            raise ParameterError(f"law must be one of {', '.join(LAWS)}, got {self.law!r}")
+        if self.frame not in ("base", "sensor"):
+            raise ParameterError(f"frame must be 'base' or 'sensor', got {self.frame!r}")
+        selection_matrix(self.axes)  # names the bad axis
+        for name in ("k1", "k2", "damping", "stiffness"):
+            object.__setattr__(self, name, _vector6(name, getattr(self, name), positive=False))
+        object.__setattr__(self, "mass", _vector6("mass", self.mass, positive=True))
+        w = np.asarray(self.wrench_desired, dtype=float).reshape(-1)
+        if w.shape != (6,) or not np.all(np.isfinite(w)):
+            raise ParameterError(f"wrench_desired needs six finite values, got {w.tolist()}")
+        object.__setattr__(self, "wrench_desired", tuple(w.tolist()))
+        if not (math.isfinite(self.filter_hz) and self.filter_hz > 0.0):
+            raise ParameterError(f"filter_hz must be > 0, got {self.filter_hz}")
+
+    def law_for(self) -> AdmittanceLaw:
+        """The law with these gains and selection."""
+        S = selection_matrix(self.axes)
+        if self.law == "combined":
+            return CombinedLaw(np.array(self.k1), np.array(self.k2), S)
+        if self.law == "position":
+            return PositionLaw(np.array(self.k1), S)
+        if self.law == "velocity":
+            return VelocityLaw(np.array(self.k2), S)
+        return MassDamperSpringLaw(
+            np.array(self.mass), np.array(self.damping), np.array(self.stiffness), S
+        )
+
+    def controller(self, period_s: float) -> AdmittanceController:
+        """The controller for a loop of period ``period_s`` [s] (the filter's sample time)."""
+        return AdmittanceController(
+            law=self.law_for(),
+            wrench_filter=LowPassFilter(self.filter_hz, period_s),
+            limits=self.limits,
+            frame=self.frame,
+            wrench_desired=np.array(self.wrench_desired),
+        )
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """A compliant run.
+
+    Attributes:
+        admittance: the controller.
+        duration_s: the longest run [s], > 0.
+        settle: end once the selected force error has settled (None: run ``duration_s``).
+        dry_run: compute and log every command, send none.
+        max_late_cycles: missed periods in a row that stop the run, >= 1.
+        online_load: weigh a grasped load online (rate: 1 / the robot's control period) and
+            compensate it too once weighed; start with the gripper empty.
+    """
+
+    admittance: AdmittanceConfig
+    duration_s: float = 30.0
+    settle: SettleRule | None = None
+    dry_run: bool = False
+    max_late_cycles: int = 10
+    online_load: bool = False
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.duration_s) and self.duration_s > 0.0):
+            raise ParameterError(f"duration_s must be > 0, got {self.duration_s}")
+        if not (isinstance(self.max_late_cycles, int) and self.max_late_cycles >= 1):
+            raise ParameterError(f"max_late_cycles must be >= 1, got {self.max_late_cycles}")
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """How a run went.
+
+    Attributes:
+        outcome: ``"duration"``, ``"settled"``, ``"loop_late"``, a
+            :class:`~ftcomp.control.safety.StopReason` value, ``"interrupted"`` (Ctrl-C) or
+            ``"error"`` (a hardware or loop fault, see ``message``).
+        message: what stopped it, one line ("" when it ended normally).
+        cycles: control cycles run.
+        duration_s: time from the first to the last logged cycle [s].
+        period_s: the control period [s].
+        travel_m: the sensor origin's displacement from start to end [m], base frame, (3,).
+        final_error: the mean force error the controller acted on over the last
+            ``settle.hold_s`` (0.3 s without a rule) [N], control frame, (3,) (NaN: no cycle).
+        log: the log's path.
+        load_events: the online load's grasp, release and contact events (empty without it).
+    """
+
+    outcome: str
+    message: str
+    cycles: int
+    duration_s: float
+    period_s: float
+    travel_m: NDArray[np.float64] = field(repr=False)
+    final_error: NDArray[np.float64] = field(repr=False)
+    log: Path
+    load_events: tuple[LoadEvent, ...] = ()
+
+    @property
+    def faulted(self) -> bool:
+        """Whether the run ended on a fault (the robot was stopped): not by its duration or a
+        settled contact."""
+        return self.outcome not in ("duration", "settled")
+
+
+class _Summary:
+    """Start and end figures of a run, kept as the rows go by (no copy of the log)."""
+
+    def __init__(self, window_s: float) -> None:
+        self.window_ns = round(window_s * 1e9)
+        self.p0: NDArray[np.float64] | None = None
+        self.p = np.full(3, math.nan)
+        self.recent: deque[tuple[int, NDArray[np.float64]]] = deque()
+        self.t0_ns: int | None = None
+        self.t_ns = 0
+
+    def add(self, record: CycleRecord) -> None:
+        r = record.reading
+        if self.t0_ns is None:
+            self.t0_ns, self.p0 = r.now_ns, r.p_base_sensor
+        self.t_ns, self.p = r.now_ns, r.p_base_sensor
+        self.recent.append((r.now_ns, record.error[:3]))
+        while self.recent and self.recent[0][0] < r.now_ns - self.window_ns:
+            self.recent.popleft()
+
+    def figures(self) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
+        if self.p0 is None or self.t0_ns is None:
+            return 0.0, np.zeros(3), np.full(3, math.nan)
+        errors = np.array([e for _, e in self.recent])
+        with np.errstate(invalid="ignore"):
+            final = np.nanmean(np.where(np.isfinite(errors), errors, np.nan), axis=0)
+        return (self.t_ns - self.t0_ns) * 1e-9, self.p - self.p0, final
+
+
+def run_compliant(
+    robot: Robot,
+    sensor: WrenchSensor,
+    calibration: Calibration | GravityModel,
+    config: RunConfig,
+    log_path: Path,
+    *,
+    mount: Mount | None = None,
+    source: str = "the calibration",
+) -> RunResult:
+    """Run the compliant loop until the run ends; the robot is stopped on any exit.
+
+    Args:
+        robot: the arm (entered). A robot whose control must be taken first
+            (:class:`~ftcomp.hardware.protocols.TakesControl`, a UR uploading its script) is
+            taken before the loop, unless ``config.dry_run``.
+        sensor: the F/T sensor (entered), on the robot's clock.
+        calibration: the identified calibration (bias, tool, tilt, and a mount or drift if it
+            has them) to compensate with, or a bare gravity model.
+        config: the run.
+        log_path: the CSV log (:data:`RUN_COLUMNS`, with ``online_load`` then
+            :data:`~ftcomp.session.online_load.LOAD_COLUMNS`), written atomically; the caller
+            checks it may be written.
+        mount: the sensor frame on the TCP (identity by default).
+        source: names the calibration in errors.
+
+    Returns:
+        The result; a fault, a lost connection or Ctrl-C end the run with the robot stopped
+        and the log kept (``outcome`` and ``message`` say what happened).
+
+    Raises:
+        ParameterError: a calibration the online load estimate cannot use.
+    """
+    if config.online_load:
+        require_tool_weight(calibration, source)
+    if isinstance(robot, TakesControl) and not config.dry_run:
+        robot.connect_control()  # before the loop: it takes a while (a UR uploads its script)
+    period_s = robot.control_period_s
+    controller = config.admittance.controller(period_s)
+    compensator = GravityCompensator(calibration)
+    load: LoadTracker | None = None
+    if config.online_load:
+        from ftcomp.compensation.online import OnlineLoadCompensator, OnlineSettings
+
+        online = OnlineLoadCompensator(calibration, OnlineSettings(rate_Hz=1.0 / period_s))
+        compensator, load = online, LoadTracker(online)
+    cycle = ControlCycle(robot, sensor, mount=mount, compensator=compensator)
+    columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if load is not None else RUN_COLUMNS
+    summary = _Summary(config.settle.hold_s if config.settle is not None else 0.3)
+    outcome, message = "", ""
+    with csv_log(log_path, columns, digits=17) as log:
+        t0_ns: list[int] = []
+
+        def on_cycle(record: CycleRecord) -> None:
+            r = record.reading
+            if not t0_ns:
+                t0_ns.append(r.now_ns)
+            t_s = (r.now_ns - t0_ns[0]) * 1e-9
+            row = [
+                t_s,
+                (r.t_sample_ns - t0_ns[0]) * 1e-9,
+                *r.wrench_raw_sensor.tolist(),
+                *r.wrench_contact_sensor.tolist(),
+                *quat_from_matrix(r.R_base_sensor),
+                *r.p_base_sensor.tolist(),
+                *record.error.tolist(),
+                *record.twist_base.tolist(),
+                1.0 if record.sent else 0.0,
+            ]
+            if load is not None:
+                row += load.update(t_s)
+            log.write(row)
+            summary.add(record)
+
+        step = CompliantStep(
+            controller,
+            robot,
+            config.duration_s,
+            on_cycle,
+            settle=config.settle,
+            dry_run=config.dry_run,
+            max_late_cycles=config.max_late_cycles,
+        )
+        try:
+            run_loop(cycle, step)
+            outcome = step.outcome
+        except KeyboardInterrupt:
+            outcome, message = "interrupted", "interrupted (Ctrl-C)"
+        except FtcompError as exc:
+            outcome, message = "error", str(exc)
+    if not message and outcome == "loop_late":
+        message = f"loop late: the robot missed {config.max_late_cycles} periods in a row"
+    elif not message and step.faulted:
+        message = f"protective stop: {outcome}"
+    duration_s, travel_m, final_error = summary.figures()
+    return RunResult(
+        outcome=outcome,
+        message=message,
+        cycles=step.cycles,
+        duration_s=duration_s,
+        period_s=period_s,
+        travel_m=travel_m,
+        final_error=final_error,
+        log=log_path,
+        load_events=tuple(load.events) if load is not None else (),
+    )

@@ -1,0 +1,333 @@
+"""A sensor stream logged live: ``ftcomp stream`` as one library call.
+
+:func:`stream` takes an entered robot and sensor and logs every reading the sensor delivers until
+the duration is up, the recording ends (a replay) or a fault or Ctrl-C stops it, and returns a
+:class:`StreamResult`. It commands nothing (a zero twist every cycle); every cycle it takes every
+new reading (``sensor.read_new``), so the log has the sensor's rate whatever the loop's, one row
+per reading (:func:`stream_columns`): the raw wrench and, with a pose, the sensor's orientation
+and origin (a valid sample CSV); with a calibration the contact wrench; with ``online_load`` the
+contact wrench with a grasped load weighed online and removed, and the load estimate
+(:class:`~ftcomp.session.online_load.StreamLoad`).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ftcomp.calibration.identify import Calibration
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.control.loop import ControlCycle, Reading, run_loop
+from ftcomp.errors import FtcompError, ParameterError
+from ftcomp.frames import quat_from_matrix
+from ftcomp.hardware.pacing import CountsLostPackets
+from ftcomp.hardware.protocols import (
+    KnowsPose,
+    Mount,
+    ReportsStreamHealth,
+    Robot,
+    WrenchSensor,
+)
+from ftcomp.hardware.replay import EndOfReplayError
+from ftcomp.model import GravityModel
+from ftcomp.samples import WRENCH_COLUMNS
+from ftcomp.session.log import csv_log
+from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, StreamLoad, require_tool_weight
+
+__all__ = [
+    "StreamConfig",
+    "StreamLogger",
+    "StreamProgress",
+    "StreamResult",
+    "stream",
+    "stream_columns",
+]
+
+Row = Sequence[float]
+
+
+def stream_columns(
+    *, with_pose: bool, compensated: bool, online_load: bool = False
+) -> tuple[str, ...]:
+    """Columns of ``ftcomp stream``'s log: ``t`` [s, session clock], the raw wrench, with a pose
+    the sensor's orientation (``qx,qy,qz,qw``) and origin (``px,py,pz`` [m], base frame), when
+    compensating the contact wrench ``cfx..ctz``, and with ``online_load`` (compensating) the
+    load estimate (:data:`~ftcomp.session.online_load.LOAD_COLUMNS`). With a pose it is a
+    valid sample CSV."""
+    pose = ("qx", "qy", "qz", "qw", "px", "py", "pz") if with_pose else ()
+    contact = tuple(f"c{c}" for c in WRENCH_COLUMNS) if compensated or online_load else ()
+    load = LOAD_COLUMNS if online_load else ()
+    return ("t", *WRENCH_COLUMNS, *pose, *contact, *load)
+
+
+class StreamLogger:
+    """Logs every reading until ``duration_s`` has passed on the session's clock.
+
+    Args:
+        sensor: the loop's sensor.
+        write_row: called with each row (see :func:`stream_columns`).
+        duration_s: how long to log [s].
+        with_pose: log the sensor's pose (the robot reports one).
+        compensator: also log the contact wrench.
+        online: instead of ``compensator``, compensate with a grasped load weighed online, and
+            log its estimate (rows may be held back while it measures the readings' rate:
+            call :meth:`finish` at the end).
+    """
+
+    def __init__(
+        self,
+        sensor: WrenchSensor,
+        write_row: Callable[[Row], None],
+        duration_s: float,
+        *,
+        with_pose: bool,
+        compensator: GravityCompensator | None = None,
+        online: StreamLoad | None = None,
+    ) -> None:
+        if not (math.isfinite(duration_s) and duration_s > 0.0):
+            raise ParameterError(f"the duration must be > 0 s, got {duration_s}")
+        if compensator is not None and online is not None:
+            raise ParameterError("give a compensator or an online load estimate, not both")
+        self.sensor, self.write_row, self.with_pose = sensor, write_row, with_pose
+        self.compensator, self.online = compensator, online
+        self.duration_ns = round(duration_s * 1e9)
+        self.t0_ns: int | None = None
+        self.count = 0
+        self.elapsed_s = 0.0
+        self.contact_force_N = math.nan
+        self._zero = np.zeros(6)
+
+    def __call__(self, r: Reading) -> NDArray[np.float64] | None:
+        """Log the readings that arrived since the previous cycle."""
+        if self.t0_ns is None:
+            self.t0_ns = r.now_ns
+            self.sensor.read_new()  # start with the readings from now on
+        self.elapsed_s = (r.now_ns - self.t0_ns) * 1e-9
+        if r.now_ns - self.t0_ns >= self.duration_ns:
+            return None
+        pose: list[float] = []
+        if self.with_pose:
+            pose = [*quat_from_matrix(r.R_base_sensor), *r.p_base_sensor.tolist()]
+        online = self.online
+        for sample in self.sensor.read_new():
+            w = sample.wrench_sensor
+            row = [sample.t_ns * 1e-9, *w.tolist(), *pose]
+            self.count += 1
+            if online is not None:
+                for ready in online.push(sample.t_ns, w, r.R_base_sensor, row):
+                    self.write_row(ready)
+                self.contact_force_N = online.contact_force_N
+                continue
+            if self.compensator is not None:
+                contact = self.compensator.compensate(w, r.R_base_sensor)
+                row += contact.tolist()
+                self.contact_force_N = float(np.linalg.norm(contact[:3]))
+            self.write_row(row)
+        return self._zero
+
+    def finish(self) -> None:
+        """Log the rows still held back (the online estimate measuring the rate)."""
+        if self.online is not None:
+            for row in self.online.finish():
+                self.write_row(row)
+
+
+@dataclass(frozen=True)
+class StreamConfig:
+    """A stream.
+
+    Attributes:
+        duration_s: how long to log [s], > 0.
+        with_pose: log the sensor's pose (the robot must report one).
+        online_load: weigh a grasped load online and compensate it too (needs a calibration).
+        online_rate_hz: the readings' rate for the online estimate [Hz]; None: measured from
+            the stamps of the first readings (held back, then logged).
+        progress_period_s: how often ``on_progress`` is called [s].
+    """
+
+    duration_s: float
+    with_pose: bool = True
+    online_load: bool = False
+    online_rate_hz: float | None = None
+    progress_period_s: float = 0.25
+
+    def __post_init__(self) -> None:
+        for name in ("duration_s", "progress_period_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ParameterError(f"{name} must be > 0, got {value:g}")
+        rate = self.online_rate_hz
+        if rate is not None and not self.online_load:
+            raise ParameterError("online_rate_hz needs online_load")
+        if rate is not None and not (math.isfinite(rate) and 0.0 < rate <= 100_000.0):
+            raise ParameterError(f"online_rate_hz must be in (0, 100000] Hz, got {rate:g}")
+
+
+@dataclass(frozen=True)
+class StreamProgress:
+    """Where a stream is (for a live status line).
+
+    Attributes:
+        readings: readings logged so far.
+        elapsed_s: time since the start [s].
+        duration_s: the planned duration [s].
+        contact_force_N: the latest contact force's norm [N] (NaN: not compensating).
+        lost_packets: packets the sensor lost so far (None: it cannot tell).
+        load: the online load's state, one short text ("" without it).
+    """
+
+    readings: int
+    elapsed_s: float
+    duration_s: float
+    contact_force_N: float
+    lost_packets: int | None
+    load: str
+
+
+@dataclass(frozen=True)
+class StreamResult:
+    """How a stream went.
+
+    Attributes:
+        outcome: ``"duration"``, ``"end_of_replay"`` (a recording ran out), ``"interrupted"``
+            (Ctrl-C) or ``"error"`` (a sensor or connection fault, see ``message``).
+        message: what stopped it, one line ("" when it ended normally).
+        readings: readings logged.
+        elapsed_s: the session's duration [s].
+        log: the log's path.
+        health: the sensor's own account of its stream at the end (lost and received packets,
+            ...), None when it gives none.
+        online_rate_hz: the rate the online load estimate used [Hz] (NaN without it).
+        online_rate_source: how that rate was found ("" without it).
+        load_events: the online load's grasp, release and contact events.
+    """
+
+    outcome: str
+    message: str
+    readings: int
+    elapsed_s: float
+    log: Path
+    health: dict[str, Any] | None = None
+    online_rate_hz: float = math.nan
+    online_rate_source: str = ""
+    load_events: tuple[LoadEvent, ...] = ()
+
+    @property
+    def rate_hz(self) -> float:
+        """Readings per second (NaN for no time)."""
+        return self.readings / self.elapsed_s if self.elapsed_s > 0.0 else math.nan
+
+    @property
+    def faulted(self) -> bool:
+        """Whether a fault or Ctrl-C ended it."""
+        return self.outcome in ("interrupted", "error")
+
+
+def stream(
+    robot: Robot,
+    sensor: WrenchSensor,
+    config: StreamConfig,
+    log_path: Path,
+    *,
+    calibration: Calibration | GravityModel | None = None,
+    mount: Mount | None = None,
+    on_progress: Callable[[StreamProgress], None] | None = None,
+    source: str = "the calibration",
+) -> StreamResult:
+    """Log the sensor's readings until the duration is up (see the module docstring).
+
+    Args:
+        robot: the arm or pose source (entered); the robot is stopped on any exit.
+        sensor: the F/T sensor (entered).
+        config: the stream.
+        log_path: the CSV log, written atomically (the caller checks it may be written).
+        calibration: compensate with it (needs the sensor's pose).
+        mount: the sensor frame on the TCP (identity by default).
+        on_progress: called every ``config.progress_period_s`` with where the stream is.
+        source: names the calibration in errors.
+
+    Raises:
+        ParameterError: compensation or a pose asked of a robot that reports none, or an online
+            load estimate with a weightless tool.
+    """
+    knows_pose = not isinstance(robot, KnowsPose) or robot.pose_known
+    if calibration is not None and not knows_pose:
+        raise ParameterError("compensation needs the sensor's pose: the robot reports none")
+    if config.online_load:
+        if calibration is None:
+            raise ParameterError("the online load estimate needs the tool's calibration")
+        require_tool_weight(calibration, source)
+    with_pose = config.with_pose and knows_pose
+    online = (
+        StreamLoad(calibration, config.online_rate_hz)
+        if config.online_load and calibration is not None
+        else None
+    )
+    compensator = (
+        GravityCompensator(calibration) if calibration is not None and online is None else None
+    )
+    columns = stream_columns(
+        with_pose=with_pose, compensated=calibration is not None, online_load=online is not None
+    )
+    lost = sensor if isinstance(sensor, CountsLostPackets) else None
+    outcome, message = "duration", ""
+    with csv_log(log_path, columns) as log:
+        logger = StreamLogger(
+            sensor,
+            log.write,
+            config.duration_s,
+            with_pose=with_pose,
+            compensator=compensator,
+            online=online,
+        )
+        sinks = []
+        if on_progress is not None:
+            period_s, last = config.progress_period_s, [time.monotonic()]
+
+            def progress(*_: object) -> None:
+                now = time.monotonic()
+                if now - last[0] < period_s:
+                    return
+                last[0] = now
+                on_progress(
+                    StreamProgress(
+                        logger.count,
+                        logger.elapsed_s,
+                        config.duration_s,
+                        logger.contact_force_N,
+                        lost.lost_packets if lost is not None else None,
+                        online.status_text() if online is not None else "",
+                    )
+                )
+
+            sinks.append(progress)
+        cycle = ControlCycle(robot, sensor, mount=mount)  # the logger compensates
+        try:
+            run_loop(cycle, logger, sinks=sinks)
+        except EndOfReplayError:
+            outcome = "end_of_replay"
+        except KeyboardInterrupt:
+            outcome, message = "interrupted", "interrupted (Ctrl-C)"
+        except FtcompError as exc:
+            outcome, message = "error", str(exc)
+        finally:
+            logger.finish()
+    health = sensor.stream_health() if isinstance(sensor, ReportsStreamHealth) else None
+    return StreamResult(
+        outcome=outcome,
+        message=message,
+        readings=logger.count,
+        elapsed_s=logger.elapsed_s,
+        log=log_path,
+        health=health,
+        online_rate_hz=online.rate_Hz if online is not None else math.nan,
+        online_rate_source=online.rate_source if online is not None else "",
+        load_events=tuple(online.events) if online is not None else (),
+    )
