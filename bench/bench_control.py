@@ -24,7 +24,7 @@ from scipy.spatial.transform import Rotation
 
 import _reference_controller as ref
 from ftcomp.control import AdmittanceController, CombinedLaw, LowPassFilter, selection_matrix
-from ftcomp.experiments.placement_config import PlacementConfig, safety_limits
+from ftcomp.session.placement import PlacementConfig, safety_limits
 
 DT = 1e-3
 STEPS = 3000  # 3 s of control

@@ -21,9 +21,8 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-from ftcomp.experiments.placement import run_placement
-from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig
 from ftcomp.model import GravityModel
+from ftcomp.session.placement import DEFAULT_GAINS, PlacementConfig, run_placement
 from ftcomp.sim import LoadSpec, SceneConfig, SimCell, SimPlacementCell
 
 CYCLES = 3000  # 3 s of simulated time per run

@@ -23,8 +23,8 @@ from ftcomp.cli import main
 from ftcomp.cli.stream import _MEASURE_S
 from ftcomp.compensation.online import LoadRls, OnlineSettings
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
-from ftcomp.session.online_load import LOAD_COLUMNS, MEASURE_RATE_S, estimate_columns
 from ftcomp.io.calibration_json import save_calibration
+from ftcomp.session.online_load import LOAD_COLUMNS, MEASURE_RATE_S, estimate_columns
 from ftcomp.sim.cell import SimCell
 
 from conftest import TRUE_MODEL, synthetic_samples

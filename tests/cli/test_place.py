@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from ftcomp.cli import main
-from ftcomp.experiments.placement import COLUMNS
+from ftcomp.session.placement import COLUMNS
 
 
 def test_place_writes_timeseries_metrics_and_plot(

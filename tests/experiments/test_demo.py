@@ -13,7 +13,7 @@ import pytest
 
 from ftcomp.cli import main
 from ftcomp.experiments.demo import MARKER_FILE
-from ftcomp.experiments.verdicts import VERDICTS
+from ftcomp.session.verdicts import VERDICTS
 from report.headless_chromium import chromium_binary, measure_page
 
 

@@ -9,10 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ftcomp.experiments.placement import run_placement, sweep_gains
-from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig
 from ftcomp.hardware.faults import FaultySensor
 from ftcomp.model import GravityModel
+from ftcomp.session.placement import DEFAULT_GAINS, PlacementConfig, run_placement, sweep_gains
 from ftcomp.sim.placement_cell import SimPlacementCell
 
 sys.path.insert(0, str(Path(__file__).parent))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from ftcomp.errors import ParameterError
-from ftcomp.experiments.verdicts import judge_placement
+from ftcomp.session.verdicts import judge_placement
 
 WEIGHT_N = 4.903325  # 500 g
 TOL_N = 0.25

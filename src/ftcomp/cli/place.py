@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from pathlib import Path
 
 from ftcomp.cli.common import warn_live_drift
 from ftcomp.errors import ParameterError
@@ -21,7 +22,7 @@ IDENTIFY_SAMPLES_PER_POSE = 200
 
 def register(p: argparse.ArgumentParser) -> None:
     """Add the ``place`` command's arguments to its parser."""
-    from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig
+    from ftcomp.session.placement import DEFAULT_GAINS, PlacementConfig
 
     gains = "; ".join(
         f"{surface} k13 = {k1 * 1e3:g} mm/N, k23 = {k2 * 1e3:g} mm/(s*N)"
@@ -103,10 +104,15 @@ def register(p: argparse.ArgumentParser) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ftcomp.experiments.placement import run_placement, write_placement_outputs
-    from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig
     from ftcomp.io.atomic import prepare_output_dir
     from ftcomp.io.calibration_json import load_calibration, save_calibration
+    from ftcomp.report.figures import plot_placement
+    from ftcomp.session.placement import (
+        DEFAULT_GAINS,
+        PlacementConfig,
+        run_placement,
+        write_placement_outputs,
+    )
     from ftcomp.sim.placement_cell import SimPlacementCell
 
     if args.control == "position" and (args.k1 is not None or args.k2 is not None):
@@ -158,7 +164,8 @@ def _run(args: argparse.Namespace) -> int:
     title = f"{args.control} on {args.surface}" + (
         ", no compensation" if args.no_compensation else ""
     )
-    paths = write_placement_outputs(result, args.out, title=title)
+    paths = write_placement_outputs(result, args.out)
+    plot_placement([result], Path(args.out) / "placement.png", title=title)
     save_calibration(paths["csv"].parent / "calibration_used.json", calibration)
     m = result.metrics
     print(

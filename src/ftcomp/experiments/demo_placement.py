@@ -17,11 +17,17 @@ import numpy as np
 
 from ftcomp import paper
 from ftcomp.calibration.identify import Calibration
-from ftcomp.experiments.placement import run_placement, sweep_gains, write_placement_outputs
-from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig, PlacementResult
 from ftcomp.io.calibration_json import model_to_dict
 from ftcomp.report.figures import plot_placement
 from ftcomp.report.html import Cell, Figure, Link, Mark, Section, Table
+from ftcomp.session.placement import (
+    DEFAULT_GAINS,
+    PlacementConfig,
+    PlacementResult,
+    run_placement,
+    sweep_gains,
+    write_placement_outputs,
+)
 from ftcomp.sim.placement_cell import SimPlacementCell
 
 if TYPE_CHECKING:
@@ -67,7 +73,8 @@ def placement_section(
     def keep(name: str, label: str, result: PlacementResult) -> None:
         runs[name], labels[name] = result, label
         title = f"{label}: {result.metrics['verdict']}"
-        write_placement_outputs(result, out / "placement" / name, title=title)
+        write_placement_outputs(result, out / "placement" / name)
+        plot_placement([result], out / "placement" / name / "placement.png", title=title)
         advance(f"placement {name}")
 
     plan: list[tuple[str, str, PlacementConfig, str]] = [

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from scipy.ndimage import uniform_filter1d
 
 if TYPE_CHECKING:
-    from ftcomp.experiments.placement import PlacementResult
+    from ftcomp.session.placement import PlacementResult
 
 __all__ = [
     "TRUE_FORCE_LABEL",

@@ -16,14 +16,20 @@ A robot holds a grasped load a small gap above a surface and sets it down, in on
   paper's Fig. 7 comparison); the safety envelope (travel, force limits) ends the run.
 
 The compensation uses the *identified* calibration it is given (bias, tool weight and centre of
-gravity, base tilt); the cell's truth (contact force, load weight) only scores the run. The loop
-is the package's one control loop (:func:`ftcomp.control.loop.run_loop`), so the same placement
-runs on the simulated cell and on a real one.
+gravity, base tilt); the cell's truth (contact force, load weight) only scores the run
+(:mod:`ftcomp.session.verdicts`). The step is the package's one compliant step
+(:class:`~ftcomp.session.compliant.CompliantStep`, the same as ``ftcomp run``'s) in its one
+control loop (:func:`ftcomp.control.loop.run_loop`), so the same placement runs on the simulated
+cell and on a real one. The decision is the step's settle rule: the force error the controller
+acted on (base z), low-passed at ``decision_cutoff_hz``, within ``band_N`` for
+``settle_time_s``; the run then stays under control for ``hold_s`` before the gripper opens.
 
 Sign conventions of the outputs: displacement and velocity are *along gravity* (positive down,
-[mm], [mm/s]); forces ``force_*_N`` are the component along gravity of the wrench the load exerts
-on the sensor (positive: the load hangs, 0: the surface carries it, negative: the robot presses
-it, as the paper's plots); ``force_true_contact_N`` is the force the surface pushes up on the load
+[mm], [mm/s]); ``force_raw_N`` and ``force_compensated_N`` are the component along gravity of
+the wrench the load exerts on the sensor (positive: the load hangs, 0: the surface carries it,
+negative: the robot presses it, as the paper's plots), ``force_filtered_N`` the same component
+of the error the decision judged (the controller's filtered error, low-passed again by the
+settle rule); ``force_true_contact_N`` is the force the surface pushes up on the load
 (simulator truth, >= 0); ``peak_press_N`` is the largest true contact force beyond the load's
 weight.
 
@@ -36,30 +42,26 @@ import json
 import math
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Literal, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import signal
 
+from ftcomp import paper
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.controller import AdmittanceController
 from ftcomp.control.filters import LowPassFilter
 from ftcomp.control.laws import CombinedLaw, selection_matrix
 from ftcomp.control.loop import ControlCycle, Reading, run_loop
+from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import ParameterError
-from ftcomp.experiments.placement_config import (
-    COLUMNS,
-    DEFAULT_GAINS,
-    PlacementConfig,
-    PlacementControl,
-    PlacementResult,
-    placement_metrics,
-    safety_limits,
-)
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 from ftcomp.model import GravityModel
+from ftcomp.session.compliant import CompliantStep, CycleRecord, SettleRule
+from ftcomp.session.verdicts import judge_placement
 
 __all__ = [
     "COLUMNS",
@@ -68,10 +70,228 @@ __all__ = [
     "PlacementConfig",
     "PlacementControl",
     "PlacementResult",
+    "placement_metrics",
     "run_placement",
+    "safety_limits",
     "sweep_gains",
     "write_placement_outputs",
 ]
+
+PlacementControl = Literal["position", "admittance"]
+
+#: Admittance gains (K1 [m/N], K2 [m/(s*N)]) that place 500 g gently on each surface of the
+#: simulated cell. The book's contact (with the arm's servo) is ~1.5e5 N/m stiff: the K1 term
+#: needs K1 * stiffness < 1 (0.1 mm/N gives 15 and rings), and K2 * stiffness must stay below the
+#: filter's bandwidth, so the book gets K1 = 0 and the paper's K2 = 0.1 mm/(s*N). The sponge
+#: (1500 N/m) takes the paper's K1 and a K2 ten times the paper's to settle in seconds.
+DEFAULT_GAINS: dict[str, tuple[float, float]] = {"sponge": (1e-4, 1e-3), "book": (0.0, 1e-4)}
+
+#: Columns of ``timeseries.csv`` (see the module docstring for signs).
+COLUMNS = (
+    "t_s",
+    "displacement_mm",
+    "velocity_mm_s",
+    "force_raw_N",
+    "force_compensated_N",
+    "force_filtered_N",
+    "force_true_contact_N",
+)
+
+
+@dataclass(frozen=True)
+class PlacementConfig:
+    """Settings of one placement run (SI units).
+
+    Attributes:
+        control: ``"position"`` or ``"admittance"`` (no default: it is the experiment).
+        compensation: use the gravity-compensated wrench (False: raw readings).
+        k1_m_per_N: K1 on the gravity axis [m/N] (paper k13 = 0.1 mm/N = 1e-4 m/N).
+        k2_m_per_s_N: K2 on the gravity axis [m/(s*N)] (paper k23 = 0.1 mm/(s*N)).
+        filter_cutoff_hz: low-pass cut-off of the wrench fed to the law [Hz]; its lag must stay
+            well below the contact loop's crossover (stiffness * K2) or a stiff surface rings.
+        decision_cutoff_hz: slower low-pass for the placement decision [Hz] (sensor noise of
+            0.125 N per sample must fall well inside the band).
+        band_N: placed when |filtered force along gravity| <= band_N ... [N]
+        settle_time_s: ... for this long [s].
+        gentle_press_N: the verdict's tolerance on the *true* contact [N]: placed gently when
+            the surface carries the load's weight within this, pressed beyond it (see
+            :mod:`ftcomp.session.verdicts`). Five times the paper's band: the band is on the
+            sensed force, and the true force also carries the calibration's error (a few
+            hundredths of a newton with the paper's nine poses).
+        approach_gap_m: clearance between load and surface at the start [m].
+        position_speed_m_per_s: descent speed of the position-only mode [m/s].
+        position_depth_m: position-only end point below the surface top [m] (the planned
+            height is wrong by this much, as a camera-located surface would be). The paper
+            gives neither its target nor its surfaces' stiffness; 4.5 mm makes our sponge's
+            press the size of the paper's (Fig. 6: -1.467 N at the end).
+        travel_margin_m: the maximum travel is ``approach_gap_m + travel_margin_m`` (plus the
+            depth in position mode) [m].
+        max_force_N: protective stop above this contact-force norm [N].
+        max_speed_m_per_s: velocity limit [m/s].
+        max_accel_m_per_s2: acceleration limit [m/s^2].
+        stale_after_s: watchdog age limit of a sample [s].
+        max_identical_samples: consecutive fresh samples with identical raw values that count as
+            a frozen sensor (the paper's sensor has about one count of noise per axis).
+        sensor_range_N: the sensor's force range per axis [N]: a raw reading there is saturated.
+        sensor_range_Nm: the sensor's torque range per axis [N*m].
+        max_duration_s: give up (``"timeout"``) after this long [s].
+        hold_s: time recorded after the decision, before releasing [s].
+        retract_m: lift after releasing [m].
+    """
+
+    control: PlacementControl
+    compensation: bool = True
+    k1_m_per_N: float = 1e-4
+    k2_m_per_s_N: float = 1e-3
+    filter_cutoff_hz: float = 20.0
+    decision_cutoff_hz: float = 2.0
+    band_N: float = 0.05
+    settle_time_s: float = 0.3
+    gentle_press_N: float = 0.25
+    approach_gap_m: float = 0.002
+    position_speed_m_per_s: float = 0.004
+    position_depth_m: float = 0.0045
+    travel_margin_m: float = 0.008
+    max_force_N: float = 40.0
+    max_speed_m_per_s: float = 0.02
+    max_accel_m_per_s2: float = 0.5
+    stale_after_s: float = 0.005
+    max_identical_samples: int = 50
+    sensor_range_N: float = paper.SENSOR["force_range_N"]
+    sensor_range_Nm: float = paper.SENSOR["torque_range_Nm"]
+    max_duration_s: float = 30.0
+    hold_s: float = 0.2
+    retract_m: float = 0.01
+
+    def __post_init__(self) -> None:
+        if self.control not in ("position", "admittance"):
+            raise ParameterError(
+                f"control must be 'position' or 'admittance', got {self.control!r}"
+            )
+        for name in ("k1_m_per_N", "k2_m_per_s_N", "hold_s", "retract_m", "position_depth_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ParameterError(f"{name} must be finite and >= 0, got {value}")
+        for name in (
+            "filter_cutoff_hz",
+            "decision_cutoff_hz",
+            "band_N",
+            "settle_time_s",
+            "gentle_press_N",
+            "approach_gap_m",
+            "position_speed_m_per_s",
+            "travel_margin_m",
+            "max_force_N",
+            "max_speed_m_per_s",
+            "max_accel_m_per_s2",
+            "stale_after_s",
+            "sensor_range_N",
+            "sensor_range_Nm",
+            "max_duration_s",
+        ):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise ParameterError(f"{name} must be finite and > 0, got {value}")
+
+
+@dataclass(frozen=True)
+class PlacementResult:
+    """One run: its configuration, timeseries (columns of :data:`COLUMNS`) and metrics."""
+
+    config: PlacementConfig
+    timeseries: dict[str, NDArray[np.float64]] = field(repr=False)
+    metrics: dict[str, Any]
+
+
+def _ripple(values: NDArray[np.float64], dt: float) -> float:
+    """RMS of ``values`` about their 1 Hz zero-phase trend (0 when too short to tell)."""
+    sos = signal.butter(2, 1.0, fs=1.0 / dt, output="sos")
+    if len(values) < 200:
+        return 0.0
+    trend = signal.sosfiltfilt(sos, values)
+    return float(np.sqrt(np.mean((values - trend) ** 2)))
+
+
+def _contact_stiffness(
+    descent_mm: NDArray[np.float64], true_force_N: NDArray[np.float64]
+) -> float | None:
+    """Slope of the true contact force over the sensor's descent while in contact [N/mm]: the
+    surface and everything between it and the sensor, in series (None: too little contact)."""
+    finite = np.isfinite(descent_mm) & np.isfinite(true_force_N)
+    x, y = descent_mm[finite], true_force_N[finite]
+    if len(x) < 20 or np.ptp(x) < 0.01:
+        return None
+    slope = np.polyfit(x, y, 1)[0]
+    return float(slope) if math.isfinite(slope) else None
+
+
+def safety_limits(config: PlacementConfig) -> SafetyLimits:
+    """The safety envelope of a placement run (base-frame axes)."""
+    max_travel_z = config.approach_gap_m + config.travel_margin_m
+    if config.control != "admittance":
+        max_travel_z += config.position_depth_m
+    return SafetyLimits(
+        max_twist=np.array([config.max_speed_m_per_s] * 3 + [0.5] * 3),
+        max_twist_rate=np.array([config.max_accel_m_per_s2] * 3 + [5.0] * 3),
+        max_travel=np.array([0.005, 0.005, max_travel_z, 0.1, 0.1, 0.1]),
+        max_force_N=config.max_force_N,
+        max_torque_Nm=config.max_force_N * 0.2,
+        stale_after_s=config.stale_after_s,
+        max_identical_samples=config.max_identical_samples,
+        sensor_range=(config.sensor_range_N, config.sensor_range_Nm),
+    )
+
+
+def placement_metrics(
+    s: dict[str, NDArray[np.float64]],
+    decision: int,
+    hold_end: int,
+    outcome: str,
+    placed: bool,
+    weight_N: float,
+    config: PlacementConfig,
+    dt: float,
+) -> dict[str, Any]:
+    """The run's metrics from its timeseries (see the module docstring of
+    :mod:`ftcomp.session.placement` for signs); ``decision`` is the row where the run was
+    decided, ``hold_end`` the end of the hold after it."""
+    run = slice(0, decision + 1)
+    true_force = s["force_true_contact_N"][run]
+    in_contact = np.flatnonzero(true_force > 0.05 * weight_N)
+    contact = slice(int(in_contact[0]), decision + 1) if len(in_contact) else slice(0, 0)
+    hold = s["force_compensated_N"][decision + 1 : hold_end]
+    if len(hold) > 10:  # decided: the mean over the hold
+        final_force = float(np.mean(hold))
+    elif placed:
+        final_force = float(s["force_filtered_N"][decision])
+    else:  # stopped: the reading that stopped it (the slow decision filter lags a sudden rise)
+        final_force = float(s["force_compensated_N"][decision])
+    final_true = float(true_force[-1]) if len(true_force) else 0.0
+    peak_press = max(0.0, float(np.max(s["force_true_contact_N"], initial=0.0)) - weight_N)
+    verdict = judge_placement(outcome, final_true, peak_press, weight_N, config.gentle_press_N)
+    return {
+        "placed": placed,
+        "verdict": verdict.verdict,
+        "true_press_N": verdict.true_press_N,
+        "verdict_reason": verdict.reason,
+        "stop_reason": outcome,
+        "control": config.control,
+        "compensation": config.compensation,
+        "k1_mm_per_N": config.k1_m_per_N * 1e3,
+        "k2_mm_per_s_per_N": config.k2_m_per_s_N * 1e3,
+        "load_weight_N": weight_N,
+        "final_force_N": final_force,
+        "final_true_contact_N": final_true,
+        "peak_press_N": peak_press,
+        "contact_stiffness_N_per_mm": _contact_stiffness(
+            s["displacement_mm"][contact], s["force_true_contact_N"][contact]
+        ),
+        "settle_time_s": float(s["t_s"][decision]) if placed else None,
+        "descent_mm": float(s["displacement_mm"][decision]),
+        "max_velocity_mm_s": float(np.max(np.abs(s["velocity_mm_s"][run]), initial=0.0)),
+        "force_ripple_N": _ripple(s["force_filtered_N"][contact], dt),
+        "velocity_ripple_mm_s": _ripple(s["velocity_mm_s"][contact], dt),
+    }
 
 
 class PlacementCell(Protocol):
@@ -107,138 +327,86 @@ class PlacementCell(Protocol):
         ...
 
 
-class _PlacementStep:
-    """One placement cycle after the I/O: controller, decision, log (a :func:`run_loop` step).
+class _PlacementLog:
+    """The placement's rows (:data:`COLUMNS`) from the compliant step's cycle records, and the
+    position-only descent's planned twist (see the module docstring)."""
 
-    Holds the controller's and the decision filter's state and the log rows; returns the twist
-    to command, or None when the run is over (``outcome`` says why).
-    """
-
-    def __init__(
-        self, cell: PlacementCell, config: PlacementConfig, first: Reading, up_base: NDArray
-    ) -> None:
-        dt = cell.robot.control_period_s
-        self.cell, self.config, self.dt, self.up = cell, config, dt, up_base
-        self.admittance = config.control == "admittance"
-        k1, k2 = (config.k1_m_per_N, config.k2_m_per_s_N) if self.admittance else (0.0, 0.0)
-        self.controller = AdmittanceController(
-            law=CombinedLaw(np.array(k1), np.array(k2), selection_matrix("z")),
-            wrench_filter=LowPassFilter(config.filter_cutoff_hz, dt),
-            limits=safety_limits(config),
-            frame="base",
-        )
-        self.depth_target = config.approach_gap_m + config.position_depth_m
+    def __init__(self, cell: PlacementCell, config: PlacementConfig, up_base: NDArray) -> None:
+        self.cell, self.config = cell, config
+        self.dt = cell.robot.control_period_s
+        self.down = -up_base  # gravity's direction, base frame
         self.nominal_down = -config.position_speed_m_per_s * np.concatenate([up_base, np.zeros(3)])
+        self.depth_target = config.approach_gap_m + config.position_depth_m
         self.zero = np.zeros(6)
-        w0 = first.wrench_contact_sensor
-        if not np.all(np.isfinite(w0)):
-            w0 = np.zeros(6)  # the watchdog stops at the first step
-        R = first.R_base_sensor
-        self.state = self.controller.initial_state(w0, R)
-        self.decision_filter = LowPassFilter(config.decision_cutoff_hz, dt, order=1, channels=1)
-        self.up_f = tuple(up_base.tolist())  # the per-cycle arithmetic is on floats
-        self.p_ref = first.p_base_sensor.tolist()
-        f0 = float(-(self.up @ R) @ w0[:3])
-        self.decision_state = self.decision_filter.initial_state_scalar(f0)
-        self.f_dec = f0
-        self.descent_prev = 0.0
-        self.t0_ns = first.now_ns
+        self.p_ref: NDArray[np.float64] | None = None
+        self.t0_ns = 0
         self.rows: list[tuple[float, ...]] = []
-        self.outcome = "timeout"
-        self.in_band_since: float | None = None
-        self.placed_at: float | None = None
+        self.descent_prev = 0.0
         self.decision_index: int | None = None
-
-    def descent(self, p: NDArray[np.float64]) -> float:
-        """How far the sensor has gone down since the start [m]."""
-        (x, y, z), (u0, u1, u2) = self.p_ref, self.up_f
-        p0, p1, p2 = p.tolist()
-        return (x - p0) * u0 + (y - p1) * u1 + (z - p2) * u2
-
-    def forces(self, r: Reading) -> tuple[float, float]:
-        """The raw and the compensated force along gravity [N] (the sign of COLUMNS)."""
-        u0, u1, u2 = self.up_f
-        (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = r.R_base_sensor.tolist()
-        # Gravity's direction in the sensor frame: -(up @ R_base_sensor).
-        d0, d1, d2 = (
-            -(u0 * a0 + u1 * b0 + u2 * c0),
-            -(u0 * a1 + u1 * b1 + u2 * c1),
-            -(u0 * a2 + u1 * b2 + u2 * c2),
+        self.f_filt = math.nan
+        # Without a settle rule (position only) the plotted force is low-passed here as the
+        # rule would (a view of the error, not a decision).
+        self.view_filter = (
+            None
+            if config.control == "admittance"
+            else LowPassFilter(config.decision_cutoff_hz, self.dt, order=1, channels=6)
         )
-        w0, w1, w2 = r.wrench_raw_sensor[:3].tolist()
-        f0, f1, f2 = r.wrench_contact_sensor[:3].tolist()
-        return d0 * w0 + d1 * w1 + d2 * w2, d0 * f0 + d1 * f1 + d2 * f2
+        self.view_state: NDArray[np.float64] | None = None
 
-    def log(
-        self,
-        r: Reading,
-        velocity: float,
-        f_filt: float,
-        descent: float | None = None,
-        forces: tuple[float, float] | None = None,
-    ) -> None:
-        """Append one row of :data:`COLUMNS` (``descent`` and ``forces`` when already known)."""
-        f_raw, f_comp = self.forces(r) if forces is None else forces
+    def start(self, r: Reading) -> None:
+        """The first reading: the origin of the descent and of the log's time."""
+        if self.p_ref is None:
+            self.p_ref, self.t0_ns = r.p_base_sensor, r.now_ns
+
+    def descent(self, p_base_sensor: NDArray[np.float64]) -> float:
+        """How far the sensor has gone down since the start [m]."""
+        if self.p_ref is None:
+            return 0.0
+        return float(self.down @ (p_base_sensor - self.p_ref))
+
+    def nominal(self, r: Reading) -> NDArray[np.float64]:
+        """The position-only descent: down at constant speed until the planned depth."""
+        self.start(r)
+        return self.nominal_down if self.descent(r.p_base_sensor) < self.depth_target else self.zero
+
+    def along_gravity(self, R_base_sensor: NDArray[np.float64], wrench: NDArray) -> float:
+        """A sensor-frame force's component along gravity [N]."""
+        return float((self.down @ R_base_sensor) @ wrench[:3])
+
+    def log(self, r: Reading, velocity: float, f_filt: float) -> None:
+        """Append one row of :data:`COLUMNS`."""
+        self.start(r)
+        R = r.R_base_sensor
         self.rows.append(
             (
                 (r.now_ns - self.t0_ns) * 1e-9,
-                (self.descent(r.p_base_sensor) if descent is None else descent) * 1e3,
+                self.descent(r.p_base_sensor) * 1e3,
                 velocity * 1e3,
-                f_raw,
-                f_comp,
+                self.along_gravity(R, r.wrench_raw_sensor),
+                self.along_gravity(R, r.wrench_contact_sensor),
                 f_filt,
                 self.cell.true_contact_force_N(),
             )
         )
 
-    def __call__(self, r: Reading) -> NDArray[np.float64] | None:
-        config = self.config
-        now = r.now_ns * 1e-9
-        if now - self.t0_ns * 1e-9 >= config.max_duration_s:
-            return None
-        R, w_c = r.R_base_sensor, r.wrench_contact_sensor
+    def __call__(self, record: CycleRecord) -> None:
+        """One controlled cycle."""
+        r = record.reading
+        self.start(r)
         descent = self.descent(r.p_base_sensor)
-        nominal = None
-        if not self.admittance:
-            nominal = self.nominal_down if descent < self.depth_target else self.zero
-        self.state, twist = self.controller.step(
-            self.state,
-            r.t_sample_ns * 1e-9,
-            w_c,
-            R,
-            now,
-            self.dt,
-            nominal,
-            wrench_raw_sensor=r.wrench_raw_sensor,
-        )
-        forces = self.forces(r)
-        f_comp = forces[1]
-        if math.isfinite(f_comp):
-            self.decision_state, self.f_dec = self.decision_filter.step_scalar(
-                self.decision_state, f_comp
-            )
-        f_filt = self.f_dec if math.isfinite(f_comp) else math.nan
         velocity = (descent - self.descent_prev) / self.dt if self.rows else 0.0
         self.descent_prev = descent
-        self.log(r, velocity, f_filt, descent, forces)
-        if self.state.stop_reason is not None:
-            self.outcome = self.state.stop_reason.value
-            return None
-        if self.admittance:
-            if self.placed_at is not None:
-                if now - self.placed_at >= config.hold_s:  # kept under control while held
-                    return None
-            elif abs(f_filt) <= config.band_N:
-                self.in_band_since = now if self.in_band_since is None else self.in_band_since
-                if now - self.in_band_since >= config.settle_time_s:
-                    self.outcome, self.placed_at = "placed", now
-                    self.decision_index = len(self.rows) - 1
-            else:
-                self.in_band_since = None
-        elif descent >= self.depth_target and not np.any(twist[:3]):
-            self.outcome = "depth_reached"
-            return None
-        return twist
+        e = record.settle_error
+        if e is None and self.view_filter is not None and np.all(np.isfinite(record.error)):
+            if self.view_state is None:
+                self.view_state = self.view_filter.initial_state(record.error)
+            self.view_state, e = self.view_filter.step(self.view_state, record.error)
+        if e is not None and np.all(np.isfinite(e[:3])):
+            self.f_filt = float(self.down @ e[:3])  # the error is in the base frame
+        finite = math.isfinite(self.along_gravity(r.R_base_sensor, r.wrench_contact_sensor))
+        self.log(r, velocity, self.f_filt if finite else math.nan)
+        if record.settled and self.decision_index is None:
+            self.decision_index = len(self.rows) - 1
 
 
 def run_placement(
@@ -276,32 +444,74 @@ def run_placement(
     for _ in range(round(0.1 / dt)):
         robot.wait_cycle()
 
+    admittance = config.control == "admittance"
+    k1, k2 = (config.k1_m_per_N, config.k2_m_per_s_N) if admittance else (0.0, 0.0)
+    controller = AdmittanceController(
+        law=CombinedLaw(np.array(k1), np.array(k2), selection_matrix("z")),
+        wrench_filter=LowPassFilter(config.filter_cutoff_hz, dt),
+        limits=safety_limits(config),
+        frame="base",
+    )
+    settle = (
+        SettleRule(
+            config.band_N,
+            hold_s=config.settle_time_s,
+            cutoff_hz=config.decision_cutoff_hz,
+            then_hold_s=config.hold_s,
+        )
+        if admittance
+        else None
+    )
     cycle = ControlCycle(
         robot,
         cell.sensor if sensor is None else sensor,
         mount=mount,
         compensator=GravityCompensator(model) if config.compensation else None,
     )
-    step = _PlacementStep(cell, config, cycle.read(), up_base)
+    log = _PlacementLog(cell, config, up_base)
+    compliant = CompliantStep(
+        controller,
+        robot,
+        config.max_duration_s,
+        log,
+        settle=settle,
+        nominal=None if admittance else log.nominal,
+    )
+    outcome = ""
+
+    def step(r: Reading) -> NDArray[np.float64] | None:
+        nonlocal outcome
+        twist = compliant(r)
+        if twist is None:
+            return None
+        reached = not admittance and log.descent(r.p_base_sensor) >= log.depth_target
+        if reached and not np.any(twist[:3]):
+            outcome = "depth_reached"
+            return None
+        return twist
+
     run_loop(cycle, step, sinks=sinks)
-    decision_index = step.decision_index if step.decision_index is not None else len(step.rows) - 1
-    placed = step.outcome in ("placed", "depth_reached")
-    if step.outcome == "depth_reached":  # hold still, then let go and lift
+    outcome = outcome or {"settled": "placed", "duration": "timeout"}.get(
+        compliant.outcome, compliant.outcome
+    )
+    decision_index = log.decision_index if log.decision_index is not None else len(log.rows) - 1
+    placed = outcome in ("placed", "depth_reached")
+    if outcome == "depth_reached":  # hold still, then let go and lift
         for _ in range(round(config.hold_s / dt)):
             cycle.advance()
-            step.log(cycle.read(), 0.0, step.rows[-1][5])
-    hold_end = len(step.rows)
+            log.log(cycle.read(), 0.0, log.rows[-1][5])
+    hold_end = len(log.rows)
     if placed:
         cell.release()
         reading = cycle.read()
         target = reading.p_base_sensor + config.retract_m * up_base
         robot.move_pose(*cycle.mount.tcp_pose(target, reading.R_base_sensor), 0.3)
 
-    data = np.array(step.rows, dtype=float).reshape(-1, len(COLUMNS))
+    data = np.array(log.rows, dtype=float).reshape(-1, len(COLUMNS))
     series = {name: data[:, i].copy() for i, name in enumerate(COLUMNS)}
     weight = cell.load_weight_N()
     metrics = placement_metrics(
-        series, decision_index, hold_end, step.outcome, placed, weight, config, dt
+        series, decision_index, hold_end, outcome, placed, weight, config, dt
     )
     return PlacementResult(config, series, metrics)
 
@@ -351,26 +561,21 @@ def _json_safe(value: Any) -> Any:
 
 
 def write_placement_outputs(
-    result: PlacementResult, out_dir: str | os.PathLike[str], *, title: str = ""
+    result: PlacementResult, out_dir: str | os.PathLike[str]
 ) -> dict[str, Path]:
-    """Write ``timeseries.csv``, ``metrics.json`` and ``placement.png`` into ``out_dir``.
+    """Write ``timeseries.csv`` (:data:`COLUMNS`) and ``metrics.json`` into ``out_dir`` (the
+    plot is a view: :func:`ftcomp.views.figures.plot_placement`).
 
     Returns:
-        The paths written, by kind (``"csv"``, ``"metrics"``, ``"plot"``).
+        The paths written, by kind (``"csv"``, ``"metrics"``).
     """
     from ftcomp.io.atomic import atomic_write_text
     from ftcomp.io.timeseries import write_timeseries_csv
-    from ftcomp.report.figures import plot_placement
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    paths = {
-        "csv": out / "timeseries.csv",
-        "metrics": out / "metrics.json",
-        "plot": out / "placement.png",
-    }
+    paths = {"csv": out / "timeseries.csv", "metrics": out / "metrics.json"}
     write_timeseries_csv(paths["csv"], result.timeseries, COLUMNS)
     metrics = {k: _json_safe(v) for k, v in result.metrics.items()}
     atomic_write_text(paths["metrics"], json.dumps(metrics, indent=2) + "\n")
-    plot_placement([result], paths["plot"], title=title)
     return paths
