@@ -121,3 +121,10 @@ def test_run_needs_an_existing_calibration(
     args = ["run", "--robot", "sim://", "--sensor", "sim://", "--control", "admittance"]
     assert main([*args, "-c", str(tmp_path / "none.json"), "-o", str(tmp_path / "r.csv")]) == 2
     assert "none.json" in capsys.readouterr().err
+
+
+def test_the_cli_offers_every_law_of_the_library() -> None:
+    import ftcomp.cli.run as run_command
+    from ftcomp.session.run import LAWS
+
+    assert run_command._LAWS == LAWS  # kept apart so that --help loads no numpy
