@@ -17,7 +17,9 @@ import io
 import math
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, BinaryIO
 
@@ -217,22 +219,17 @@ def _open(
 ) -> SampleCsvReader | ParquetSampleReader:
     """A block reader for ``path`` (Parquet by its extension, else CSV), keeping what the
     output needs: the rows' text for a CSV output, their columns for a Parquet one."""
+    open_reader: Callable[..., SampleCsvReader | ParquetSampleReader]
     if path.suffix.lower() == ".parquet":
         from ftcomp.io.parquet import ParquetSampleReader
 
-        return ParquetSampleReader(
-            path,
-            force_range_N=config.force_range_N,
-            torque_range_Nm=config.torque_range_Nm,
-            batch_rows=config.parquet_batch_rows,
-            with_text=not to_parquet,
-            with_table=to_parquet,
-        )
-    return SampleCsvReader(
+        open_reader = partial(ParquetSampleReader, batch_rows=config.parquet_batch_rows)
+    else:
+        open_reader = partial(SampleCsvReader, chunk_bytes=config.csv_chunk_bytes)
+    return open_reader(
         path,
         force_range_N=config.force_range_N,
         torque_range_Nm=config.torque_range_Nm,
-        chunk_bytes=config.csv_chunk_bytes,
         with_text=not to_parquet,
         with_table=to_parquet,
     )
