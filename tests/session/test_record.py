@@ -266,3 +266,16 @@ def test_configs_refuse_bad_values_naming_the_parameter(build: Any, match: str) 
 def test_an_event_carries_a_record_exactly_when_a_pose_was_recorded() -> None:
     with pytest.raises(ParameterError, match="record"):
         PoseEvent("recorded", 1, math.inf, None)
+
+
+def test_an_error_in_the_callers_callback_stops_the_robot_and_goes_through(
+    tmp_path: Path, rng: np.random.Generator
+) -> None:
+    cell = FakeCell(TRUE_MODEL, rng)
+
+    def broken(event: PoseEvent) -> None:
+        raise RuntimeError("announcer broke")
+
+    with pytest.raises(RuntimeError, match="announcer broke"):
+        record(cell, cell, driven(tmp_path / "s.csv"), on_event=broken)
+    assert cell.stops >= 1 and len(read_samples(tmp_path / "s.csv")) == 50

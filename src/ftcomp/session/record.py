@@ -315,6 +315,9 @@ def record(
             _stop(robot)  # nothing to keep: the error is the answer
             raise
         ended, reason = "fault", str(exc)
+    except BaseException:
+        _stop(robot)  # anything else (a failed write, a bug): stop the arm, then let it through
+        raise
     stopped = _stop(robot)
     if stopped:
         ended, reason = (
