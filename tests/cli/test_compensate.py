@@ -175,21 +175,3 @@ def test_warnings_of_the_whole_file_are_printed(tmp_path, calibration, small_chu
     assert main(["compensate", str(src), "-c", str(calibration), "-o", str(out)]) == 0
     assert "were the angles given in radians?" in capsys.readouterr().err
     assert len(out.read_text().splitlines()) == 101
-
-
-def test_the_reading_thread_stops_when_the_writer_stops_and_hands_on_its_errors() -> None:
-    from ftcomp.cli.compensate import _prefetched
-    from ftcomp.errors import InputFileError
-
-    def blocks(fail_at: int | None):
-        for i in range(1000):
-            if i == fail_at:
-                raise InputFileError(f"bad block {i}")
-            yield i
-
-    stream = _prefetched(blocks(None))  # type: ignore[arg-type]
-    assert [next(stream), next(stream)] == [0, 1]
-    stream.close()  # the consumer leaves with the worker waiting to hand on block 2 or 3
-    assert list(_prefetched(blocks(None))) == list(range(1000))  # type: ignore[arg-type]
-    with pytest.raises(InputFileError, match="bad block 7"):
-        list(_prefetched(blocks(7)))  # type: ignore[arg-type]

@@ -19,9 +19,14 @@ import argparse
 import math
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
-from ftcomp.errors import FtcompError, ParameterError
+from ftcomp.errors import ParameterError
+
+if TYPE_CHECKING:
+    from ftcomp.session.pose_record import PoseEvent
+    from ftcomp.session.record import HandGuided, RecordConfig, RobotDriven
 
 __all__ = ["register", "run"]
 
@@ -95,153 +100,101 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.set_defaults(handler=run)
 
 
-def _positive(name: str, value: float) -> float:
-    if not (math.isfinite(value) and value > 0.0):
-        raise ParameterError(f"{name} must be > 0, got {value:g}")
-    return value
+def _config(args: argparse.Namespace) -> RecordConfig:
+    """The session the options ask for (checked by the library's records)."""
+    from ftcomp.session.hand_guided import StillCriteria
+    from ftcomp.session.pose_record import WrenchTolerance
+    from ftcomp.session.record import HandGuided, RecordConfig, RobotDriven
 
-
-class _Output:
-    """The sample CSV, rewritten after every pose (see the module docstring)."""
-
-    def __init__(self, path: Path, encoding: str) -> None:
-        from ftcomp.calibration.collect_live import PoseRecord
-
-        self.path, self.encoding = path, encoding
-        self.records: list[PoseRecord] = []
-
-    def add(self, record: object) -> None:
-        from scipy.spatial.transform import Rotation
-
-        from ftcomp.calibration.collect_live import PoseRecord, samples_from_records
-        from ftcomp.io.samples_csv import write_samples
-
-        assert isinstance(record, PoseRecord)
-        self.records.append(record)
-        s = samples_from_records(self.records, str(self.path))
-        write_samples(
-            self.path,
-            s.wrench_sensor,
-            Rotation.from_matrix(s.R_base_sensor),
-            encoding=self.encoding,  # type: ignore[arg-type]
-            pose=s.pose,
-            t=s.t,
+    tolerance = WrenchTolerance(*args.drift_N_Nm)
+    plan: RobotDriven | HandGuided
+    if args.manual:
+        try:
+            n_poses = int(args.poses)
+        except ValueError:
+            raise ParameterError(
+                f"--manual needs --poses N (a number of poses), got {args.poses!r}"
+            ) from None
+        still = StillCriteria(
+            still_s=args.still_s,
+            wrench=tolerance,
+            min_separation_rad=math.radians(args.min_separation_deg),
         )
+        plan = HandGuided(n_poses, still, samples_per_pose=args.samples_per_pose)
+    else:
+        import numpy as np
 
-    def summary(self) -> str:
-        n = sum(len(r.wrench_sensor) for r in self.records)
-        return f"{self.path}: {len(self.records)} poses ({n} readings)"
+        from ftcomp.io.poses_csv import read_pose_file
+        from ftcomp.paper import paper_poses
+
+        if args.poses.isdigit():
+            raise ParameterError(
+                "--poses N needs --manual; the robot drives through paper|FILE.csv"
+            )
+        plan = RobotDriven(
+            paper_poses() if args.poses == "paper" else read_pose_file(args.poses),
+            samples_per_pose=(
+                DEFAULT_SAMPLES_PER_POSE if args.samples_per_pose is None else args.samples_per_pose
+            ),
+            position_base_m=(
+                None if args.position_mm is None else np.array(args.position_mm) * 1e-3
+            ),
+            move_duration_s=args.move_s,
+            settle_max_s=args.settle_max_s,
+            tolerance=tolerance,
+        )
+    return RecordConfig(Path(args.output), plan, encoding=args.encoding, overwrite=args.force)
 
 
-def _announce(record: object, number: int, total: int, note: str = "") -> None:
-    from ftcomp.calibration.collect_live import PoseRecord
+def _announce(event: PoseEvent, plan: RobotDriven | HandGuided) -> None:
+    """One line per event; by hand, what to do next."""
+    from ftcomp.session.record import HandGuided
 
-    assert isinstance(record, PoseRecord)
+    by_hand = plan if isinstance(plan, HandGuided) else None
+    angle = math.degrees(event.angle_rad)
+    if event.record is None:  # a hand-guided still period too close to a recorded pose
+        limit_deg = math.degrees(by_hand.still.min_separation_rad) if by_hand else 0.0
+        print(
+            f"ignored: {angle:.1f} deg from pose {event.number} (< {limit_deg:g} deg); move on",
+            flush=True,
+        )
+        return
+    note = f", {angle:.0f} deg from the nearest" if by_hand and event.number > 1 else ""
+    record = event.record
     mean, scatter = record.mean, record.scatter
     print(
-        f"pose {number}/{total} ({record.pose_id}{note}): {len(record.wrench_sensor)} readings, "
+        f"pose {event.number}/{plan.n_poses} ({record.pose_id}{note}): "
+        f"{len(record.wrench_sensor)} readings, "
         f"mean F [{mean[0]:+.3f} {mean[1]:+.3f} {mean[2]:+.3f}] N, "
         f"M [{mean[3]:+.4f} {mean[4]:+.4f} {mean[5]:+.4f}] N*m; "
         f"scatter {scatter[:3].max():.3f} N, {scatter[3:].max():.4f} N*m",
         flush=True,
     )
-
-
-def _record_driven(args: argparse.Namespace, out: _Output) -> None:
-    from ftcomp.calibration.collect_live import WrenchTolerance, record_poses
-    from ftcomp.io.poses_csv import read_pose_file
-    from ftcomp.paper import paper_poses
-
-    poses = paper_poses() if args.poses == "paper" else read_pose_file(args.poses)
-    n = args.samples_per_pose if args.samples_per_pose is not None else DEFAULT_SAMPLES_PER_POSE
-    position = None if args.position_mm is None else [v * 1e-3 for v in args.position_mm]
-    tolerance = WrenchTolerance(*args.drift_N_Nm)
-
-    def on_pose(record: object) -> None:
-        out.add(record)
-        _announce(record, len(out.records), len(poses))
-
-    with open_hardware(args) as (robot, sensor, mount):
-        print(f"recording {len(poses)} poses of {poses.source}, {n} readings each", flush=True)
-        record_poses(
-            robot,
-            sensor,
-            poses,
-            n,
-            on_pose,
-            mount=mount,
-            position_base_m=position,
-            move_duration_s=args.move_s,
-            settle_max_s=args.settle_max_s,
-            tolerance=tolerance,
-        )
-
-
-def _record_manual(args: argparse.Namespace, out: _Output) -> None:
-    from ftcomp.calibration.collect_live import WrenchTolerance
-    from ftcomp.calibration.collect_manual import ManualEvent, ManualRecorder, StillCriteria
-    from ftcomp.control.loop import ControlCycle, run_loop
-
-    try:
-        total = int(args.poses)
-    except ValueError:
-        raise ParameterError(
-            f"--manual needs --poses N (a number of poses), got {args.poses!r}"
-        ) from None
-    if total < 3:
-        raise ParameterError(f"--poses must be >= 3 to separate bias from gravity, got {total}")
-    criteria = StillCriteria(
-        still_s=_positive("--still-s", args.still_s),
-        wrench=WrenchTolerance(*args.drift_N_Nm),
-        min_separation_rad=math.radians(args.min_separation_deg),
-    )
-
-    def on_event(event: ManualEvent) -> None:
-        angle = math.degrees(event.angle_rad)
-        if event.kind == "too_close":
-            print(
-                f"ignored: {angle:.1f} deg from pose {event.number} (< "
-                f"{args.min_separation_deg:g} deg); move on",
-                flush=True,
-            )
-            return
-        out.add(event.record)
-        note = "" if event.number == 1 else f", {angle:.0f} deg from the nearest"
-        _announce(event.record, event.number, total, note)
-        if event.number < total:
-            print(f"move to a new pose and hold it still for {args.still_s:g} s", flush=True)
-
-    with open_hardware(args) as (robot, sensor, mount):
-        print(f"hold the arm still for {args.still_s:g} s at each of {total} poses", flush=True)
-        recorder = ManualRecorder(
-            sensor, total, criteria, on_event, samples_per_pose=args.samples_per_pose
-        )
-        run_loop(ControlCycle(robot, sensor, mount=mount), recorder)
+    if by_hand and event.number < plan.n_poses:
+        print(f"move to a new pose and hold it still for {by_hand.still.still_s:g} s", flush=True)
 
 
 def run(args: argparse.Namespace) -> int:
     """Record; on a fault after the first pose, keep the file and say why."""
     from ftcomp.io.atomic import check_writable
+    from ftcomp.session.record import RobotDriven, record
 
-    output = check_writable(args.output, overwrite=args.force)
-    for name, value in (("--move-s", args.move_s), ("--settle-max-s", args.settle_max_s)):
-        _positive(name, value)
-    for value in args.drift_N_Nm:
-        _positive("--drift-N-Nm", value)
-    if args.samples_per_pose is not None and args.samples_per_pose < 2:
-        raise ParameterError(f"--samples-per-pose must be >= 2, got {args.samples_per_pose}")
-    if not args.manual and args.poses.isdigit():
-        raise ParameterError("--poses N needs --manual; the robot drives through paper|FILE.csv")
-    out = _Output(output, args.encoding)
-    try:
-        (_record_manual if args.manual else _record_driven)(args, out)
-    except KeyboardInterrupt:
-        print(f"error: interrupted (Ctrl-C); {out.summary()}", file=sys.stderr)
-        return 130
-    except FtcompError as exc:
-        if not out.records:
-            raise
-        print(f"error: {exc}; {out.summary()}", file=sys.stderr)
-        return 1
-    print(f"wrote {out.summary()}")
-    return 0
+    check_writable(args.output, overwrite=args.force)  # before connecting to anything
+    config = _config(args)
+    plan = config.plan
+    if isinstance(plan, RobotDriven):
+        intro = (
+            f"recording {plan.n_poses} poses of {plan.poses.source}, "
+            f"{plan.samples_per_pose} readings each"
+        )
+    else:
+        intro = f"hold the arm still for {plan.still.still_s:g} s at each of {plan.n_poses} poses"
+    with open_hardware(args) as (robot, sensor, mount):
+        print(intro, flush=True)
+        result = record(robot, sensor, config, mount=mount, on_event=lambda e: _announce(e, plan))
+    summary = f"{result.output}: {result.poses_recorded} poses ({result.readings} readings)"
+    if result.ended == "complete":
+        print(f"wrote {summary}")
+        return 0
+    print(f"error: {result.reason}; {summary}", file=sys.stderr)
+    return 130 if result.ended == "interrupted" else 1

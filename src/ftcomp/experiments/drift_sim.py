@@ -41,7 +41,6 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.collect_live import PoseRecord, record_poses, samples_from_records
 from ftcomp.calibration.design import candidate_orientations, design_poses, nominal_theta
 from ftcomp.calibration.drift import DriftModel, calibrate_extended, rebias
 from ftcomp.calibration.identify import Calibration, pose_means
@@ -49,6 +48,8 @@ from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.hardware.registry import open_robot, open_sensor
 from ftcomp.samples import PoseList, Samples
+from ftcomp.session.pose_record import PoseRecord, samples_from_records
+from ftcomp.session.robot_driven import record_poses
 from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, SimCell
 
 __all__ = [

@@ -7,10 +7,10 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.collect_live import WrenchTolerance
-from ftcomp.calibration.collect_manual import ManualEvent, ManualRecorder, StillCriteria
 from ftcomp.control.loop import Reading
 from ftcomp.hardware.protocols import WrenchSample
+from ftcomp.session.hand_guided import ManualRecorder, StillCriteria
+from ftcomp.session.pose_record import PoseEvent, WrenchTolerance
 
 PERIOD_NS = 2_000_000  # a 500 Hz loop
 P = np.array([0.4, 0.0, 0.3])
@@ -53,7 +53,7 @@ def _drive(
 def test_each_still_period_is_recorded_once_and_a_near_repeat_is_ignored(
     rng: np.random.Generator,
 ) -> None:
-    events: list[ManualEvent] = []
+    events: list[PoseEvent] = []
     sensor = _Sensor()
     criteria = StillCriteria(still_s=0.2, min_separation_rad=math.radians(5.0))
     recorder = ManualRecorder(sensor, 2, criteria, events.append)  # type: ignore[arg-type]
@@ -85,7 +85,7 @@ def test_each_still_period_is_recorded_once_and_a_near_repeat_is_ignored(
 def test_readings_that_still_drift_are_not_recorded_until_they_settle(
     rng: np.random.Generator,
 ) -> None:
-    events: list[ManualEvent] = []
+    events: list[PoseEvent] = []
     sensor = _Sensor()
     criteria = StillCriteria(still_s=0.2, wrench=WrenchTolerance(0.05, 0.005))
     recorder = ManualRecorder(sensor, 1, criteria, events.append)  # type: ignore[arg-type]

@@ -6,13 +6,14 @@ the readings every cycle:
 
 - a *still period* starts when the pose last moved beyond ``position_tol_m`` / ``angle_tol_rad``
   from where the period started, and counts once it has lasted ``still_s`` with readings that do
-  not drift (:class:`~ftcomp.calibration.collect_live.WrenchTolerance`, the means of the
+  not drift (:class:`~ftcomp.session.pose_record.WrenchTolerance`, the means of the
   window's two halves); while the readings still drift, the window slides on;
 - a still period at an orientation within ``min_separation_rad`` of a pose already recorded is
   ignored (it would add nothing to separate bias from gravity) and announced as such;
 - otherwise its readings (the last ``samples_per_pose`` of the window, by default its last three
   quarters: the arm may still have been creeping into the pose when the window opened) become
-  the next :class:`~ftcomp.calibration.collect_live.PoseRecord`, announced at once;
+  the next :class:`~ftcomp.session.pose_record.PoseRecord`, announced at once (a
+  :class:`~ftcomp.session.pose_record.PoseEvent`);
 - after ``n_poses`` records the step ends the loop.
 
 Each still period is handled once: the arm must move beyond the tolerance before the next one.
@@ -24,20 +25,26 @@ import collections
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.collect_live import PoseRecord, WrenchTolerance, wrench_drift
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import WrenchSensor
+from ftcomp.session.pose_record import (
+    PoseEvent,
+    PoseRecord,
+    WrenchTolerance,
+    is_settled,
+    nearest_pose,
+)
 
 if TYPE_CHECKING:
     from ftcomp.control.loop import Reading
 
-__all__ = ["ManualEvent", "ManualRecorder", "StillCriteria"]
+__all__ = ["ManualRecorder", "StillCriteria"]
 
 
 @dataclass(frozen=True)
@@ -67,25 +74,6 @@ class StillCriteria:
             raise ParameterError(f"min_separation_rad must be >= 0, got {self.min_separation_rad}")
 
 
-@dataclass(frozen=True)
-class ManualEvent:
-    """What the recorder noticed.
-
-    Attributes:
-        kind: ``"recorded"`` (a new pose) or ``"too_close"`` (a still period ignored).
-        number: the new pose's number (1, 2, ...), or the number of the recorded pose it was
-            too close to.
-        angle_rad: the rotation to the nearest recorded pose before this one [rad] (inf for the
-            first).
-        record: the new pose's readings (None when ignored).
-    """
-
-    kind: Literal["recorded", "too_close"]
-    number: int
-    angle_rad: float
-    record: PoseRecord | None
-
-
 class ManualRecorder:
     """A :func:`~ftcomp.control.loop.run_loop` step recording still periods (module docstring).
 
@@ -93,7 +81,8 @@ class ManualRecorder:
         sensor: the loop's sensor (its ``read_new`` gives every reading).
         n_poses: stop after this many poses, >= 1.
         criteria: what counts as still and as new.
-        on_event: called with every :class:`ManualEvent` as it happens.
+        on_event: called with every :class:`~ftcomp.session.pose_record.PoseEvent` as it
+            happens.
         samples_per_pose: readings kept per pose (the window's last ones); None: the last
             three quarters of the window.
     """
@@ -103,7 +92,7 @@ class ManualRecorder:
         sensor: WrenchSensor,
         n_poses: int,
         criteria: StillCriteria,
-        on_event: Callable[[ManualEvent], None],
+        on_event: Callable[[PoseEvent], None],
         *,
         samples_per_pose: int | None = None,
     ) -> None:
@@ -131,15 +120,6 @@ class ManualRecorder:
             return True
         return float(Rotation.from_matrix(R_ref.T @ R).magnitude()) > self.criteria.angle_tol_rad
 
-    def _nearest(self, R: NDArray[np.float64]) -> tuple[int, float]:
-        """(number, angle [rad]) of the recorded pose nearest in orientation; (0, inf) if none."""
-        best = (0, math.inf)
-        for k, record in enumerate(self.records, start=1):
-            angle = float(Rotation.from_matrix(record.R_base_sensor.T @ R).magnitude())
-            if angle < best[1]:
-                best = (k, angle)
-        return best
-
     def __call__(self, reading: Reading) -> NDArray[np.float64] | None:
         """One cycle: take the new readings, follow the pose, record a still period."""
         if len(self.records) >= self.n_poses:
@@ -157,9 +137,7 @@ class ManualRecorder:
         if self._handled or now - self._since_ns < self._still_ns or len(self._window) < 4:
             return self._zero
         wrench = np.array([w for _, w in self._window])
-        drift = wrench_drift(wrench)
-        tol = self.criteria.wrench
-        if np.any(drift[:3] > tol.force_N) or np.any(drift[3:] > tol.torque_Nm):
+        if not is_settled(wrench, self.criteria.wrench):
             # Still settling: slide the window to its second half and wait on.
             half = len(self._window) // 2
             for _ in range(half):
@@ -167,13 +145,13 @@ class ManualRecorder:
             self._since_ns = self._window[0][0]
             return self._zero
         self._handled = True
-        number, angle = self._nearest(R)
+        number, angle = nearest_pose(self.records, R)
         if angle < self.criteria.min_separation_rad:
-            self.on_event(ManualEvent("too_close", number, angle, None))
+            self.on_event(PoseEvent("too_close", number, angle, None))
             return self._zero
         keep = self.samples_per_pose or (3 * len(self._window)) // 4
         stamps = np.array([t for t, _ in self._window], dtype=np.int64)[-keep:]
         record = PoseRecord(str(len(self.records) + 1), R, p, wrench[-keep:], stamps)
         self.records.append(record)
-        self.on_event(ManualEvent("recorded", len(self.records), angle, record))
+        self.on_event(PoseEvent("recorded", len(self.records), angle, record))
         return None if len(self.records) >= self.n_poses else self._zero

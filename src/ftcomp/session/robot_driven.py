@@ -1,113 +1,34 @@
-"""Calibration readings from a live cell, pose by pose, so nothing is lost when it stops.
+"""Robot-driven calibration readings, pose by pose, so nothing is lost when it stops.
 
 :func:`record_poses` drives the robot through a :class:`~ftcomp.samples.PoseList` with
 :func:`ftcomp.calibration.collect.record_static`, one pose at a time: it checks every pose is
 reachable before the first move (when the robot can tell, see
 :class:`~ftcomp.hardware.pacing.ChecksReachability`), moves, waits for the arm to come to rest,
 records ``samples_per_pose`` readings and re-records while the readings still drift (the
-wrench has not settled). Each finished pose goes to ``on_pose`` as a :class:`PoseRecord` at once,
-so a caller can write it out before the next move: a fault, a lost connection or Ctrl-C later
-loses nothing already recorded.
+wrench has not settled). Each finished pose goes to ``on_pose`` as a
+:class:`~ftcomp.session.pose_record.PoseRecord` at once, so a caller can write it out before
+the next move: a fault, a lost connection or Ctrl-C later loses nothing already recorded.
 
 The hand-guided variant (the user moves the arm, ftcomp notices each still period) is
-:mod:`ftcomp.calibration.collect_manual`.
+:mod:`ftcomp.session.hand_guided`; :func:`ftcomp.session.record.record` runs either as a whole
+session that writes the sample file.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ftcomp.arrays import freeze_field
 from ftcomp.calibration.collect import record_static
 from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
 from ftcomp.hardware.pacing import ChecksReachability
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
-from ftcomp.samples import PoseList, Samples
+from ftcomp.samples import PoseList
+from ftcomp.session.pose_record import PoseRecord, WrenchTolerance, is_settled, wrench_drift
 
-__all__ = [
-    "PoseRecord",
-    "WrenchTolerance",
-    "check_reachable",
-    "record_poses",
-    "samples_from_records",
-    "wrench_drift",
-]
-
-
-@dataclass(frozen=True)
-class PoseRecord:
-    """The readings recorded at one pose.
-
-    Attributes:
-        pose_id: the pose's label.
-        R_base_sensor: the sensor's measured orientation there, (3, 3).
-        p_base_sensor: the sensor origin there [m], base frame, (3,).
-        wrench_sensor: the readings [N, N*m], sensor frame, (n, 6).
-        t_ns: their stamps [ns] on the session's clock, (n,).
-    """
-
-    pose_id: str
-    R_base_sensor: NDArray[np.float64] = field(repr=False)
-    p_base_sensor: NDArray[np.float64] = field(repr=False)
-    wrench_sensor: NDArray[np.float64] = field(repr=False)
-    t_ns: NDArray[np.int64] = field(repr=False)
-
-    def __post_init__(self) -> None:
-        n = len(self.wrench_sensor)
-        if n < 1:
-            raise ParameterError(f"pose {self.pose_id}: no readings")
-        freeze_field(self, "R_base_sensor", (3, 3))
-        freeze_field(self, "p_base_sensor", (3,))
-        freeze_field(self, "wrench_sensor", (n, 6))
-        freeze_field(self, "t_ns", (n,), dtype=np.int64)
-
-    @property
-    def mean(self) -> NDArray[np.float64]:
-        """Mean reading [N, N*m], (6,)."""
-        return np.asarray(self.wrench_sensor.mean(axis=0))
-
-    @property
-    def scatter(self) -> NDArray[np.float64]:
-        """Standard deviation of one reading per channel [N, N*m], (6,) (0 for one reading)."""
-        if len(self.wrench_sensor) < 2:
-            return np.zeros(6)
-        return np.asarray(self.wrench_sensor.std(axis=0, ddof=1))
-
-
-@dataclass(frozen=True)
-class WrenchTolerance:
-    """How much the mean reading may move within a still window and still count as settled.
-
-    Attributes:
-        force_N: largest change of the force channels' mean between the window's halves [N].
-        torque_Nm: same for the torques [N*m].
-    """
-
-    force_N: float = 0.1
-    torque_Nm: float = 0.01
-
-    def __post_init__(self) -> None:
-        if not (self.force_N > 0.0 and self.torque_Nm > 0.0):
-            raise ParameterError("wrench tolerances must be > 0")
-
-
-def wrench_drift(wrench: ArrayLike) -> NDArray[np.float64]:
-    """``|mean(second half) - mean(first half)|`` per channel [N, N*m], (6,): how much the
-    readings drift over a window (zeros for fewer than two readings)."""
-    w = np.asarray(wrench, dtype=float).reshape(-1, 6)
-    if len(w) < 2:
-        return np.zeros(6)
-    half = len(w) // 2
-    return np.asarray(np.abs(w[half:].mean(axis=0) - w[:half].mean(axis=0)))
-
-
-def _settled(wrench: ArrayLike, tolerance: WrenchTolerance) -> bool:
-    drift = wrench_drift(wrench)
-    return bool(np.all(drift[:3] <= tolerance.force_N) and np.all(drift[3:] <= tolerance.torque_Nm))
+__all__ = ["check_reachable", "record_poses"]
 
 
 def check_reachable(
@@ -151,13 +72,14 @@ def record_poses(
         sensor: the F/T sensor (entered), on the robot's clock.
         poses: sensor orientations (and optionally positions) to visit.
         samples_per_pose: readings averaged at each pose, >= 2.
-        on_pose: called with each :class:`PoseRecord`, in order.
+        on_pose: called with each :class:`~ftcomp.session.pose_record.PoseRecord`, in order.
         mount: the sensor frame on the TCP (identity by default).
         position_base_m: the sensor origin for poses without a position [m], base frame;
             None: where the sensor is when recording starts.
         move_duration_s: about how long each move takes [s] (the robot caps the speed).
         settle_max_s: longest wait for the arm to come to rest [s].
-        tolerance: how still the readings must be (see :class:`WrenchTolerance`).
+        tolerance: how still the readings must be (see
+            :class:`~ftcomp.session.pose_record.WrenchTolerance`).
         max_tries: recordings at one pose before giving up on a drifting wrench.
 
     Raises:
@@ -196,7 +118,7 @@ def record_poses(
                 move_duration_s=move_duration_s,
                 settle_max_s=settle_max_s,
             )
-            if _settled(samples.wrench_sensor, tolerance):
+            if is_settled(samples.wrench_sensor, tolerance):
                 break
         else:
             drift = wrench_drift(samples.wrench_sensor)
@@ -216,20 +138,3 @@ def record_poses(
                 np.round(samples.t * 1e9).astype(np.int64),
             )
         )
-
-
-def samples_from_records(records: Sequence[PoseRecord], source: str) -> Samples:
-    """All records as one :class:`~ftcomp.samples.Samples` (``pose`` ids, ``t`` in seconds)."""
-    if not records:
-        raise ParameterError(f"{source}: no poses recorded")
-    n = [len(r.wrench_sensor) for r in records]
-    return Samples(
-        wrench_sensor=np.concatenate([r.wrench_sensor for r in records]),
-        R_base_sensor=np.concatenate(
-            [np.broadcast_to(r.R_base_sensor, (k, 3, 3)) for r, k in zip(records, n, strict=True)]
-        ),
-        encoding="quaternion",
-        pose=np.repeat([r.pose_id for r in records], n),
-        t=np.concatenate([r.t_ns for r in records]).astype(np.float64) * 1e-9,
-        source=source,
-    )

@@ -1,0 +1,311 @@
+"""Compensate a whole sample file: bias and tool gravity removed from every reading.
+
+:func:`compensate_file` streams: the samples are read, compensated and written one block of rows
+at a time (the next block read ahead in a worker thread, :func:`~ftcomp.session.read_ahead.
+read_ahead`), so memory does not grow with the file (an hour at 7 kHz, 25 M rows, runs in a few
+hundred MB). Input and output are CSV or Parquet by their extension. A CSV output repeats each
+input line as it was and appends the contact wrench and load weight as ``% .9e`` (ten
+significant digits); a Parquet output has the input columns and the extra columns
+(:data:`EXTRA_COLUMNS`) as float64. The output appears only when every row has been written (a
+temporary file renamed into place): an error leaves no file.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, BinaryIO
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ftcomp.arrays import freeze_field
+from ftcomp.calibration.identify import Calibration
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.errors import ParameterError
+from ftcomp.io.atomic import atomic_output, check_writable
+from ftcomp.io.calibration_json import load_calibration
+from ftcomp.io.numtext import format_rows
+from ftcomp.io.sample_format import SampleBlock
+from ftcomp.io.samples_csv import SampleCsvReader
+from ftcomp.session.read_ahead import read_ahead
+
+if TYPE_CHECKING:
+    from ftcomp.io.parquet import ParquetSampleReader
+
+__all__ = ["EXTRA_COLUMNS", "CompensateConfig", "CompensateResult", "compensate_file"]
+
+#: Columns added to the input: the contact wrench (Eq. 22) and the load weight (Eq. 23).
+EXTRA_COLUMNS = ("fx_ext", "fy_ext", "fz_ext", "tx_ext", "ty_ext", "tz_ext", "load_weight_N")
+
+PathLike = str | os.PathLike[str]
+
+
+def _optional_positive(name: str, value: float | None, *, integer: bool = False) -> None:
+    if value is None:
+        return
+    kind_ok = isinstance(value, int) if integer else isinstance(value, int | float)
+    if isinstance(value, bool) or not kind_ok or not (math.isfinite(value) and value > 0):
+        kind = "an integer" if integer else "a number"
+        raise ParameterError(f"{name} must be {kind} > 0 or None, got {value!r}")
+
+
+@dataclass(frozen=True)
+class CompensateConfig:
+    """How to read and write.
+
+    Attributes:
+        force_range_N: the sensor's force range [N]: a reading beyond +-this is an error (a
+            saturated sensor); None: no check.
+        torque_range_Nm: same for the torques [N*m].
+        overwrite: whether an existing output may be replaced (never the input).
+        csv_chunk_bytes: bytes of a CSV input read per block (None: the reader's default).
+        parquet_batch_rows: rows of a Parquet input read per block (None: the reader's default).
+    """
+
+    force_range_N: float | None = None
+    torque_range_Nm: float | None = None
+    overwrite: bool = False
+    csv_chunk_bytes: int | None = None
+    parquet_batch_rows: int | None = None
+
+    def __post_init__(self) -> None:
+        _optional_positive("force_range_N", self.force_range_N)
+        _optional_positive("torque_range_Nm", self.torque_range_Nm)
+        _optional_positive("csv_chunk_bytes", self.csv_chunk_bytes, integer=True)
+        _optional_positive("parquet_batch_rows", self.parquet_batch_rows, integer=True)
+
+
+@dataclass(frozen=True)
+class CompensateResult:
+    """What was written.
+
+    Attributes:
+        output: the file written.
+        rows: rows compensated.
+        duration_s: wall-clock time of the whole run [s].
+        load_weight_mean_N: mean load weight ``|F_contact|`` over all rows [N] (NaN without rows).
+        load_weight_max_N: its largest value [N] (NaN without rows).
+        contact_wrench_mean_sensor: mean contact wrench [N, N*m], sensor frame, (6,).
+        t_range_s: first and last time stamp [s] when the calibration's bias drift was applied
+            from them; None otherwise.
+        warnings: things that look wrong but were accepted (the input's, and a bias drift
+            extrapolated beyond its calibrated time range).
+    """
+
+    output: Path
+    rows: int
+    duration_s: float
+    load_weight_mean_N: float
+    load_weight_max_N: float
+    contact_wrench_mean_sensor: NDArray[np.float64] = field(repr=False)
+    t_range_s: tuple[float, float] | None = None
+    warnings: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.rows, int) and self.rows >= 0):
+            raise ParameterError(f"rows must be an integer >= 0, got {self.rows!r}")
+        if not self.duration_s >= 0.0:
+            raise ParameterError(f"duration_s must be >= 0, got {self.duration_s}")
+        freeze_field(self, "contact_wrench_mean_sensor", (6,))
+
+
+@dataclass
+class _Totals:
+    """Running sums over the blocks, for the result."""
+
+    rows: int = 0
+    weight_sum: float = 0.0
+    weight_max: float = -np.inf
+    contact_sum: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    t_min: float = np.inf
+    t_max: float = -np.inf
+
+    def add(self, contact: NDArray[np.float64], weight: NDArray[np.float64]) -> None:
+        self.rows += len(weight)
+        self.weight_sum += float(weight.sum())
+        self.weight_max = max(self.weight_max, float(weight.max()))
+        self.contact_sum += contact.sum(axis=0)
+
+
+def _extra(
+    block: SampleBlock, compensator: GravityCompensator, totals: _Totals
+) -> NDArray[np.float64]:
+    """The block's contact wrench and load weight, shape (N, 7)."""
+    extra = np.empty((len(block), 7))
+    t_s = block.t if compensator.bias_drift is not None else None
+    if t_s is not None and len(t_s):
+        totals.t_min = min(totals.t_min, float(t_s.min()))
+        totals.t_max = max(totals.t_max, float(t_s.max()))
+    contact = compensator.compensate(block.wrench_sensor, block.R_base_sensor, t_s=t_s)
+    extra[:, :6] = contact
+    np.sqrt(np.einsum("ij,ij->i", contact[:, :3], contact[:, :3]), out=extra[:, 6])
+    totals.add(contact, extra[:, 6])
+    return extra
+
+
+def _csv_block(handle: BinaryIO, block: SampleBlock, extra: NDArray[np.float64]) -> None:
+    """Write each line of the block's text with its ``extra`` row appended."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    text, ends, n = block.text, block.text_ends, len(extra)
+    if text is None or ends is None:
+        raise RuntimeError("compensate: the samples were read without their text")
+    if len(ends) != n:  # a quoted cell spans lines: join row by row
+        rows = list(csv.reader(io.StringIO(text.decode("utf-8"))))
+        data, offsets = format_rows(extra)
+        out = io.StringIO()
+        writer = csv.writer(out, lineterminator="")
+        for i, row in enumerate(rows):
+            writer.writerow(row)
+            out.write(bytes(data[offsets[i] : offsets[i + 1]]).decode("ascii") + "\n")
+        handle.write(out.getvalue().encode("utf-8"))
+        return
+    # Line i is text[ends[i-1]:ends[i]], i.e. "\n" + its cells (the first has no "\n"): joined
+    # with its extra cells, the whole block is one buffer; it only lacks the final "\n".
+    lines = pa.LargeStringArray.from_buffers(
+        n, pa.py_buffer(np.concatenate([[0], ends]).astype(np.int64)), pa.py_buffer(text)
+    )
+    data, offsets = format_rows(extra)
+    cells = pa.LargeStringArray.from_buffers(n, pa.py_buffer(offsets), pa.py_buffer(data))
+    joined = pc.binary_join_element_wise(lines, cells, pa.scalar("", pa.large_string()))
+    bounds = np.frombuffer(joined.buffers()[1], dtype=np.int64)[joined.offset :][[0, n]]
+    handle.write(memoryview(joined.buffers()[2])[bounds[0] : bounds[1]])
+    handle.write(b"\n")
+
+
+def _write(
+    reader: SampleCsvReader | ParquetSampleReader,
+    compensator: GravityCompensator,
+    output: Path,
+    to_parquet: bool,
+) -> _Totals:
+    """Compensate every block of ``reader`` into ``output``, atomically."""
+    totals = _Totals()
+    with atomic_output(output) as tmp, tmp.open("wb") as handle:
+        if to_parquet:
+            import pyarrow as pa
+
+            from ftcomp.io.parquet import ParquetBlockWriter
+
+            with ParquetBlockWriter(handle) as writer:
+                for block in read_ahead(reader.blocks()):
+                    extra = _extra(block, compensator, totals)
+                    table = block.table
+                    for j, name in enumerate(EXTRA_COLUMNS):
+                        table = table.append_column(name, pa.array(extra[:, j]))
+                    writer.write(table)
+        else:
+            header = io.StringIO()
+            csv.writer(header, lineterminator="\n").writerow(
+                (*reader.layout.header, *EXTRA_COLUMNS)
+            )
+            handle.write(header.getvalue().encode("utf-8"))
+            for block in read_ahead(reader.blocks()):
+                _csv_block(handle, block, _extra(block, compensator, totals))
+    return totals
+
+
+def _open(
+    path: Path, config: CompensateConfig, *, to_parquet: bool
+) -> SampleCsvReader | ParquetSampleReader:
+    """A block reader for ``path`` (Parquet by its extension, else CSV), keeping what the
+    output needs: the rows' text for a CSV output, their columns for a Parquet one."""
+    open_reader: Callable[..., SampleCsvReader | ParquetSampleReader]
+    if path.suffix.lower() == ".parquet":
+        from ftcomp.io.parquet import ParquetSampleReader
+
+        open_reader = partial(ParquetSampleReader, batch_rows=config.parquet_batch_rows)
+    else:
+        open_reader = partial(SampleCsvReader, chunk_bytes=config.csv_chunk_bytes)
+    return open_reader(
+        path,
+        force_range_N=config.force_range_N,
+        torque_range_Nm=config.torque_range_Nm,
+        with_text=not to_parquet,
+        with_table=to_parquet,
+    )
+
+
+def compensate_file(
+    samples: PathLike,
+    output: PathLike,
+    calibration: Calibration | PathLike,
+    config: CompensateConfig | None = None,
+) -> CompensateResult:
+    """Remove sensor bias and tool gravity from every reading of ``samples`` into ``output``.
+
+    Args:
+        samples: a sample CSV, or Parquet when the name ends in ``.parquet``: fx..tz [N, N*m] in
+            the sensor frame and one orientation encoding (docs/files.md); a ``t`` column when
+            the calibration has a bias drift.
+        output: CSV, or Parquet by its extension: the input columns plus
+            :data:`EXTRA_COLUMNS` (contact wrench [N, N*m], sensor frame, and load weight [N]).
+            Never ``samples``, nor the calibration file.
+        calibration: the calibration, or its file (``ftcomp calibrate``'s JSON).
+        config: ranges, block sizes and the overwrite policy (defaults: no range check,
+            the readers' block sizes, never replace a file).
+
+    Returns:
+        The :class:`CompensateResult` (rows, time, means, warnings).
+
+    Raises:
+        ParameterError: the output is an input, exists without ``config.overwrite`` or cannot
+            be written; the input already has a compensated column; the calibration's bias
+            drift needs a time column the input lacks.
+        InputFileError, CalibrationFileError: naming the file (and row, column) at fault.
+    """
+    config = config if config is not None else CompensateConfig()
+    start = time.monotonic()
+    source, out = Path(samples), Path(output)
+    if out.resolve() == source.resolve() or (
+        out.exists() and source.exists() and os.path.samefile(out, source)
+    ):
+        raise ParameterError(f"{out}: the output would replace the input samples")
+    inputs: tuple[PathLike, ...] = (source,)
+    if not isinstance(calibration, Calibration):
+        inputs = (source, calibration)
+    out = check_writable(out, overwrite=config.overwrite, inputs=inputs)
+    if not isinstance(calibration, Calibration):
+        calibration = load_calibration(calibration)
+    to_parquet = out.suffix.lower() == ".parquet"
+    with _open(source, config, to_parquet=to_parquet) as reader:
+        clash = [c for c in EXTRA_COLUMNS if c in reader.layout.header]
+        if clash:
+            raise ParameterError(
+                f"{reader.source}: already has column {clash[0]!r}; compensate raw readings only"
+            )
+        drift = calibration.bias_drift
+        if drift is not None and not reader.layout.has_t:
+            raise ParameterError(
+                f"{reader.source}: the calibration has a {drift.name} bias drift, applied from "
+                "each row's time: the file has no 't' (or 't_ns') column"
+            )
+        totals = _write(reader, GravityCompensator(calibration), out, to_parquet)
+    warnings = list(reader.warnings)
+    t_range = (totals.t_min, totals.t_max) if drift is not None and totals.rows else None
+    if drift is not None and (totals.t_min < drift.t_min_s or totals.t_max > drift.t_max_s):
+        warnings.append(
+            f"rows at t = {totals.t_min:.6g} .. {totals.t_max:.6g} s lie outside the "
+            f"calibrated time range {drift.t_min_s:.6g} .. {drift.t_max_s:.6g} s: the "
+            f"{drift.name} bias drift is extrapolated there (re-bias with ftcomp rebias)"
+        )
+    rows = totals.rows
+    return CompensateResult(
+        output=out,
+        rows=rows,
+        duration_s=time.monotonic() - start,
+        load_weight_mean_N=totals.weight_sum / rows if rows else math.nan,
+        load_weight_max_N=totals.weight_max if rows else math.nan,
+        contact_wrench_mean_sensor=totals.contact_sum / rows if rows else np.full(6, np.nan),
+        t_range_s=t_range,
+        warnings=tuple(warnings),
+    )

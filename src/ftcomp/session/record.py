@@ -1,0 +1,334 @@
+"""A calibration recording session on a live cell, written to a sample CSV as it goes.
+
+:func:`record` runs one session with a robot and a sensor the caller has opened (and entered),
+in one of two ways given by the :class:`RecordConfig`'s plan:
+
+- :class:`RobotDriven`: the robot moves through a :class:`~ftcomp.samples.PoseList` (blocking
+  moves at its speed limit, every pose checked before the first move when the robot can tell,
+  see :func:`ftcomp.session.robot_driven.record_poses`), waits until arm and readings are still
+  and records ``samples_per_pose`` readings at each;
+- :class:`HandGuided`: the user jogs or free-drives the arm; each period held still is recorded
+  (:class:`ftcomp.session.hand_guided.ManualRecorder` in :func:`ftcomp.control.loop.run_loop`),
+  one too close in orientation to an earlier pose is ignored.
+
+The sample file is rewritten (atomically) after every pose, so Ctrl-C, a lost connection or a
+sensor fault leaves a valid file with every pose recorded so far. The session then stops the
+robot and returns a :class:`RecordResult` saying how it ended (``"complete"``,
+``"interrupted"`` or ``"fault"`` with the reason) and what it recorded. A failure before the
+first pose is recorded (an unreachable pose, a silent sensor) is raised instead: there is
+nothing to keep.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal, get_args
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from ftcomp.arrays import freeze_field
+from ftcomp.control.loop import ControlCycle, run_loop
+from ftcomp.errors import FtcompError, ParameterError
+from ftcomp.frames import OrientationEncoding
+from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
+from ftcomp.io.atomic import check_writable
+from ftcomp.io.samples_csv import write_samples
+from ftcomp.samples import PoseList, Samples
+from ftcomp.session.hand_guided import ManualRecorder, StillCriteria
+from ftcomp.session.pose_record import (
+    PoseEvent,
+    PoseRecord,
+    WrenchTolerance,
+    nearest_pose,
+    samples_from_records,
+)
+from ftcomp.session.robot_driven import record_poses
+
+__all__ = ["HandGuided", "RecordConfig", "RecordResult", "RobotDriven", "record"]
+
+#: How a session ended.
+Ending = Literal["complete", "interrupted", "fault"]
+
+
+def _positive(name: str, value: float) -> None:
+    if not (isinstance(value, int | float) and np.isfinite(value) and value > 0.0):
+        raise ParameterError(f"{name} must be a number > 0, got {value!r}")
+
+
+def _readings_per_pose(value: int | None, *, optional: bool) -> None:
+    if value is None and optional:
+        return
+    if not (isinstance(value, int) and not isinstance(value, bool) and value >= 2):
+        raise ParameterError(f"samples_per_pose must be an integer >= 2, got {value!r}")
+
+
+@dataclass(frozen=True)
+class RobotDriven:
+    """The robot drives through poses.
+
+    Attributes:
+        poses: sensor orientations (and optionally positions) to visit, in order.
+        samples_per_pose: readings recorded at each pose, >= 2.
+        position_base_m: the sensor origin for poses without a position [m], base frame, (3,);
+            None: where the sensor is when the session starts.
+        move_duration_s: about how long each move takes [s] (the robot caps the speed).
+        settle_max_s: longest wait for the arm to come to rest at a pose [s].
+        tolerance: how little the readings may drift to count as settled.
+        max_tries: recordings at one pose before giving up on a drifting wrench, >= 1.
+    """
+
+    poses: PoseList
+    samples_per_pose: int = 500
+    position_base_m: NDArray[np.float64] | None = field(default=None, repr=False)
+    move_duration_s: float = 2.0
+    settle_max_s: float = 5.0
+    tolerance: WrenchTolerance = field(default_factory=WrenchTolerance)
+    max_tries: int = 5
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.poses, PoseList):
+            raise ParameterError(f"poses must be a PoseList, got {type(self.poses).__name__}")
+        _readings_per_pose(self.samples_per_pose, optional=False)
+        if self.position_base_m is not None:
+            freeze_field(self, "position_base_m", (3,), finite=True)
+        _positive("move_duration_s", self.move_duration_s)
+        _positive("settle_max_s", self.settle_max_s)
+        if not isinstance(self.tolerance, WrenchTolerance):
+            raise ParameterError("tolerance must be a WrenchTolerance")
+        if not (isinstance(self.max_tries, int) and self.max_tries >= 1):
+            raise ParameterError(f"max_tries must be an integer >= 1, got {self.max_tries!r}")
+
+    @property
+    def n_poses(self) -> int:
+        """Poses to record."""
+        return len(self.poses)
+
+
+@dataclass(frozen=True)
+class HandGuided:
+    """The user moves the arm; each still period at a new orientation is recorded.
+
+    Attributes:
+        n_poses: poses to record, >= 3 (fewer cannot separate bias from gravity).
+        still: when the arm counts as held still, and when a pose is new.
+        samples_per_pose: readings kept per pose (the still window's last ones), >= 2; None:
+            the last three quarters of the window.
+    """
+
+    n_poses: int
+    still: StillCriteria = field(default_factory=StillCriteria)
+    samples_per_pose: int | None = None
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.n_poses, int) and not isinstance(self.n_poses, bool)):
+            raise ParameterError(f"n_poses must be an integer, got {self.n_poses!r}")
+        if self.n_poses < 3:
+            raise ParameterError(
+                f"n_poses must be >= 3 to separate bias from gravity, got {self.n_poses}"
+            )
+        if not isinstance(self.still, StillCriteria):
+            raise ParameterError("still must be a StillCriteria")
+        _readings_per_pose(self.samples_per_pose, optional=True)
+
+
+@dataclass(frozen=True)
+class RecordConfig:
+    """One recording session.
+
+    Attributes:
+        output: the sample CSV to write (rewritten after every pose).
+        plan: robot-driven poses or hand-guided still periods.
+        encoding: the orientation columns to write.
+        overwrite: whether an existing ``output`` may be replaced.
+    """
+
+    output: Path
+    plan: RobotDriven | HandGuided
+    encoding: OrientationEncoding = "quaternion"
+    overwrite: bool = False
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "output", Path(self.output))
+        if not isinstance(self.plan, RobotDriven | HandGuided):
+            raise ParameterError(
+                f"plan must be RobotDriven or HandGuided, got {type(self.plan).__name__}"
+            )
+        if self.encoding not in get_args(OrientationEncoding):
+            raise ParameterError(
+                f"encoding must be one of {', '.join(get_args(OrientationEncoding))}, "
+                f"got {self.encoding!r}"
+            )
+
+
+@dataclass(frozen=True)
+class RecordResult:
+    """How a session went.
+
+    Attributes:
+        output: the sample CSV (written when at least one pose was recorded).
+        ended: ``"complete"`` (every planned pose), ``"interrupted"`` (Ctrl-C) or ``"fault"``.
+        reason: why it ended early, one line ("" when complete).
+        records: the poses recorded, in order (all of them are in ``output``).
+        samples: the same readings as one :class:`~ftcomp.samples.Samples` (None without any).
+        poses_planned: poses the plan asked for.
+        duration_s: wall-clock time of the session [s].
+    """
+
+    output: Path
+    ended: Ending
+    reason: str
+    records: tuple[PoseRecord, ...] = field(repr=False)
+    samples: Samples | None = field(repr=False)
+    poses_planned: int
+    duration_s: float
+
+    def __post_init__(self) -> None:
+        if self.ended not in get_args(Ending):
+            raise ParameterError(f"ended must be one of {get_args(Ending)}, got {self.ended!r}")
+        if (self.ended == "complete") != (self.reason == ""):
+            raise ParameterError("a reason is given exactly when the session did not complete")
+        if (self.samples is None) != (not self.records):
+            raise ParameterError("samples are given exactly when poses were recorded")
+        if not self.duration_s >= 0.0:
+            raise ParameterError(f"duration_s must be >= 0, got {self.duration_s}")
+
+    @property
+    def poses_recorded(self) -> int:
+        """Poses in the file."""
+        return len(self.records)
+
+    @property
+    def readings(self) -> int:
+        """Readings in the file, over all poses."""
+        return sum(len(r.wrench_sensor) for r in self.records)
+
+
+class _SampleFile:
+    """The session's records, written out whole (atomically) after every new one."""
+
+    def __init__(self, path: Path, encoding: OrientationEncoding) -> None:
+        self.path, self.encoding = path, encoding
+        self.records: list[PoseRecord] = []
+        self.samples: Samples | None = None
+
+    def add(self, record: PoseRecord) -> None:
+        self.records.append(record)
+        self.samples = samples_from_records(self.records, str(self.path))
+        write_samples(
+            self.path,
+            self.samples.wrench_sensor,
+            Rotation.from_matrix(self.samples.R_base_sensor),
+            encoding=self.encoding,
+            pose=self.samples.pose,
+            t=self.samples.t,
+        )
+
+
+def _stop(robot: Robot) -> str:
+    """Stop the robot; what went wrong doing so, or "" (after a fault the link may be gone)."""
+    try:
+        robot.stop()
+    except FtcompError as exc:
+        return f"stopping the robot failed: {exc}"
+    return ""
+
+
+def record(
+    robot: Robot,
+    sensor: WrenchSensor,
+    config: RecordConfig,
+    *,
+    mount: Mount | None = None,
+    on_event: Callable[[PoseEvent], None] | None = None,
+) -> RecordResult:
+    """Run a recording session (module docstring) and write its sample file as it goes.
+
+    Args:
+        robot: the arm (entered).
+        sensor: the F/T sensor (entered), on the robot's clock.
+        config: what to record and where.
+        mount: the sensor frame on the TCP (identity by default).
+        on_event: called with every :class:`~ftcomp.session.pose_record.PoseEvent` (a pose
+            recorded, once it is in the file; a hand-guided still period ignored), e.g. to
+            announce it.
+
+    Returns:
+        The :class:`RecordResult`; on Ctrl-C or a fault after the first pose, with ``ended``
+        saying so (the robot stopped, the file holding every pose recorded).
+
+    Raises:
+        ParameterError: ``config.output`` may not or cannot be written.
+        FtcompError: the session failed before its first pose was recorded (an unreachable
+            pose, nothing moved; a silent sensor; a lost connection).
+    """
+    output = check_writable(config.output, overwrite=config.overwrite)
+    mount = mount if mount is not None else Mount()
+    file = _SampleFile(output, config.encoding)
+    plan = config.plan
+
+    def recorded(event: PoseEvent) -> None:
+        if event.record is not None:
+            file.add(event.record)
+        if on_event is not None:
+            on_event(event)
+
+    def driven(record: PoseRecord) -> None:
+        _, angle = nearest_pose(file.records, record.R_base_sensor)
+        recorded(PoseEvent("recorded", len(file.records) + 1, angle, record))
+
+    start = time.monotonic()
+    ended: Ending = "complete"
+    reason = ""
+    try:
+        if isinstance(plan, RobotDriven):
+            record_poses(
+                robot,
+                sensor,
+                plan.poses,
+                plan.samples_per_pose,
+                driven,
+                mount=mount,
+                position_base_m=plan.position_base_m,
+                move_duration_s=plan.move_duration_s,
+                settle_max_s=plan.settle_max_s,
+                tolerance=plan.tolerance,
+                max_tries=plan.max_tries,
+            )
+        else:
+            recorder = ManualRecorder(
+                sensor,
+                plan.n_poses,
+                plan.still,
+                recorded,
+                samples_per_pose=plan.samples_per_pose,
+            )
+            run_loop(ControlCycle(robot, sensor, mount=mount), recorder)
+    except KeyboardInterrupt:
+        ended, reason = "interrupted", "interrupted (Ctrl-C)"
+    except FtcompError as exc:
+        if not file.records:
+            _stop(robot)  # nothing to keep: the error is the answer
+            raise
+        ended, reason = "fault", str(exc)
+    except BaseException:
+        _stop(robot)  # anything else (a failed write, a bug): stop the arm, then let it through
+        raise
+    stopped = _stop(robot)
+    if stopped:
+        ended, reason = (
+            ("fault", stopped) if ended == "complete" else (ended, f"{reason}; {stopped}")
+        )
+    return RecordResult(
+        output=output,
+        ended=ended,
+        reason=reason,
+        records=tuple(file.records),
+        samples=file.samples,
+        poses_planned=plan.n_poses,
+        duration_s=time.monotonic() - start,
+    )
