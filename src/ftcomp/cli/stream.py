@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.control.loop import ControlCycle, run_loop
     from ftcomp.experiments.live import StreamLogger, stream_columns
     from ftcomp.experiments.live_load import StreamLoad, event_lines, require_tool_weight
-    from ftcomp.hardware.pacing import CountsLostPackets
+    from ftcomp.hardware.protocols import CountsLostPackets
     from ftcomp.hardware.replay import EndOfReplayError
     from ftcomp.io.atomic import atomic_output, check_writable
     from ftcomp.io.calibration_json import load_calibration
