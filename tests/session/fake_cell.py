@@ -24,6 +24,9 @@ PAPER_MODEL = GravityModel(
 
 
 class FakeCell:
+    clock_name = "simulation"
+    pose_known = True
+
     def __init__(
         self,
         stiffness_N_per_m: float,

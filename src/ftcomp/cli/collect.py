@@ -147,12 +147,12 @@ def run(args: argparse.Namespace) -> int:
     poses = paper_poses() if args.poses == "paper" else read_pose_file(args.poses)
     uri = robot_uri(args)
     with open_robot(uri) as robot, open_sensor("sim://", robot):
-        from ftcomp.sim.cell import SimCell
+        from ftcomp.sim.backend import as_sim_cell
 
-        assert isinstance(robot, SimCell)  # sim:// opens the MuJoCo cell
-        samples, truth_model = record_with_truth(robot, poses, args.samples_per_pose)
-        spec = robot.sensor.spec
-        sensing_end_N = robot.config.tool.sensing_end_weight_N
+        cell = as_sim_cell(robot, "sim collect (the ground truth)")
+        samples, truth_model = record_with_truth(cell, poses, args.samples_per_pose)
+        spec = cell.sensor.spec
+        sensing_end_N = cell.config.tool.sensing_end_weight_N
     write_samples(
         samples_path,
         samples.wrench_sensor,

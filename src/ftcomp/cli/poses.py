@@ -4,10 +4,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import io
 import math
 import sys
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,8 +24,10 @@ from ftcomp.calibration.design import (
     predicted_std_errors,
     tilt_from_down_rad,
 )
-from ftcomp.errors import FtcompError, ParameterError
+from ftcomp.errors import ParameterError
+from ftcomp.hardware.protocols import ChecksReachability, Robot
 from ftcomp.io.atomic import atomic_write_text, check_writable
+from ftcomp.samples import PoseList
 
 __all__ = ["register"]
 
@@ -44,8 +48,8 @@ def register(parser: argparse.ArgumentParser) -> None:
             "centre of gravity and tilt most precise (D-optimal on its Fisher information, "
             "greedy plus exchange), reachable by the robot, ordered to keep the travel short; "
             "prints the predicted standard error of every parameter beside the paper's nine "
-            "poses'. The CSV (pose,qx,qy,qz,qw; with --urdf also x_m,y_m,z_m) is a --poses "
-            "file for sim collect and record."
+            "poses'. The CSV (pose,qx,qy,qz,qw; with --robot or --urdf also x_m,y_m,z_m, the "
+            "position the poses were checked at) is a --poses file for sim collect and record."
         ),
     )
     design.add_argument(
@@ -58,8 +62,9 @@ def register(parser: argparse.ArgumentParser) -> None:
     reach.add_argument(
         "--robot",
         metavar="URI",
-        help="keep only poses this robot reaches (inverse kinematics within joint limits at "
-        "the collection position; sim://...) (default: no reachability check)",
+        help="keep only poses this robot reaches by its own check (a robot that has one: "
+        "sim://..., ur://HOST), its TCP taken as the sensor frame, at --position-mm or where "
+        "the TCP is now; the file then lists that position (default: no reachability check)",
     )
     reach.add_argument(
         "--urdf",
@@ -86,10 +91,11 @@ def register(parser: argparse.ArgumentParser) -> None:
         type=float,
         nargs=3,
         metavar=("X", "Y", "Z"),
-        help="with --urdf: the tip's origin for every pose, base-link frame [mm], as record's "
-        "--position-mm (default: in front of the robot at shoulder height, half the chain's "
-        "length from the first joint towards the tip at the zero configuration, or, if out of "
-        "reach, the tip at the middle of every joint's range; printed)",
+        help="with --urdf or --robot: the tip's origin for every pose, base frame [mm], as "
+        "record's --position-mm (default with --robot: where the TCP is now; with --urdf: in "
+        "front of the robot at shoulder height, half the chain's length from the first joint "
+        "towards the tip at the zero configuration, or, if out of reach, the tip at the middle "
+        "of every joint's range; printed)",
     )
     design.add_argument(
         "--max-tilt-deg",
@@ -109,28 +115,6 @@ def register(parser: argparse.ArgumentParser) -> None:
     design.set_defaults(handler=run)
 
 
-def _reachability(uri: str):  # type: ignore[no-untyped-def]
-    """A check ``R -> bool`` by the robot's inverse kinematics, and the robot to close."""
-    from ftcomp.hardware.registry import open_robot
-    from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, SimCell
-
-    robot = open_robot(uri)
-    if not isinstance(robot, SimCell):
-        robot.__exit__(None, None, None)
-        raise ParameterError(
-            f"--robot {uri}: the reachability check needs the simulated robot (sim://...)"
-        )
-
-    def reachable(R: NDArray[np.float64]) -> bool:
-        try:
-            robot.solve_ik(np.array(COLLECTION_POSITION_BASE_M), R)
-        except FtcompError:
-            return False
-        return True
-
-    return reachable, robot
-
-
 def _position_m(position_mm: list[float]) -> NDArray[np.float64]:
     """``--position-mm X Y Z`` as metres."""
     p = np.array(position_mm) / 1000.0
@@ -139,46 +123,39 @@ def _position_m(position_mm: list[float]) -> NDArray[np.float64]:
     return p
 
 
-#: The URDF design gives up (bounded time: each unreachable candidate costs every IK start and
-#: a new design round) after this many unreachable candidates, or after ``_FEW`` when most of
-#: those checked are unreachable.
+#: A design gives up (bounded time: each unreachable candidate costs every IK start and a new
+#: design round) after this many unreachable candidates, or after ``_FEW`` when most of those
+#: checked are unreachable.
 _MAX_UNREACHABLE = 150
 _FEW = 20
 
 
-class _UrdfReach:
-    """``R -> bool`` by the URDF chain's inverse kinematics at one tip position; counts."""
+class _Reach:
+    """``R -> bool``: whether the tip reaches an orientation at one position ``p`` [m]; counts
+    the candidates checked and stops a design that finds too few reachable ones."""
 
-    def __init__(self, args: argparse.Namespace) -> None:
-        from ftcomp.ros2.urdf import UrdfChain
-        from ftcomp.ros2.urdf_ik import UrdfIk, front_position, mid_configuration
-
-        self.chain = UrdfChain(args.urdf, args.base_link, args.tip_link)
-        self.ik = UrdfIk(self.chain)
-        given = args.position_mm is not None
-        self.p = _position_m(args.position_mm) if given else front_position(self.chain)
-        if not given and self.ik.solve(self.p) is None:  # a short or odd chain
-            self.p = self.ik.pose(mid_configuration(self.chain))[0]
-        where = (
-            "--position-mm " + " ".join(f"{v:g}" for v in args.position_mm)
-            if given
-            else "the default position"
-        )
-        if self.ik.solve(self.p) is None:
-            raise ParameterError(
-                f"{where} {np.round(self.p, 4).tolist()} m: the tip link {self.chain.tip_link!r} "
-                f"of {args.urdf} cannot reach it within the joint limits"
-            )
+    def __init__(self, source: str, who: str, p: NDArray[np.float64]) -> None:
+        self.source = source  # the option naming the check, for messages
+        self.who = who  # what checks, for the warnings
+        self.p = p
         self.checked = self.reached = 0
+
+    def reaches(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> bool:
+        """Whether the tip reaches orientation ``R`` at ``p`` [m]."""
+        raise NotImplementedError
+
+    def describe(self) -> str:
+        """What checks, for the summary."""
+        raise NotImplementedError
 
     def __call__(self, R: NDArray[np.float64]) -> bool:
         self.checked += 1
-        ok = self.ik.solve(self.p, R) is not None
+        ok = self.reaches(self.p, R)
         self.reached += ok
         missed = self.checked - self.reached
         if missed >= _MAX_UNREACHABLE or (missed >= _FEW and missed > self.reached):
             raise ParameterError(
-                f"--urdf {self.chain.source}: {missed} of the {self.checked} candidate "
+                f"{self.source}: {missed} of the {self.checked} candidate "
                 f"orientations checked are out of reach with the tip at "
                 f"{np.round(self.p, 4).tolist()} m; too few reachable ones to design from: "
                 "give a --position-mm where the arm turns the tip more freely, or a smaller "
@@ -187,12 +164,67 @@ class _UrdfReach:
         return ok
 
     def summary(self) -> str:
-        c = self.chain
         return (
-            f"reachability: {c.source}, {c.base_link} -> {c.tip_link} ({len(c.joint_names)} "
-            f"joints), tip at {np.round(self.p, 4).tolist()} m: {self.reached} of "
-            f"{self.checked} candidate orientations checked reached by inverse kinematics"
+            f"reachability: {self.describe()}, tip at {np.round(self.p, 4).tolist()} m: "
+            f"{self.reached} of {self.checked} candidate orientations checked reached by "
+            "inverse kinematics"
         )
+
+
+class _UrdfReach(_Reach):
+    """By the URDF chain's inverse kinematics."""
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        from ftcomp.ros2.urdf import UrdfChain
+        from ftcomp.ros2.urdf_ik import UrdfIk, front_position, mid_configuration
+
+        self.chain = UrdfChain(args.urdf, args.base_link, args.tip_link)
+        self.ik = UrdfIk(self.chain)
+        given = args.position_mm is not None
+        p = _position_m(args.position_mm) if given else front_position(self.chain)
+        if not given and self.ik.solve(p) is None:  # a short or odd chain
+            p = self.ik.pose(mid_configuration(self.chain))[0]
+        where = (
+            "--position-mm " + " ".join(f"{v:g}" for v in args.position_mm)
+            if given
+            else "the default position"
+        )
+        if self.ik.solve(p) is None:
+            raise ParameterError(
+                f"{where} {np.round(p, 4).tolist()} m: the tip link {self.chain.tip_link!r} "
+                f"of {args.urdf} cannot reach it within the joint limits"
+            )
+        super().__init__(f"--urdf {self.chain.source}", "the URDF's inverse kinematics", p)
+
+    def reaches(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> bool:
+        return self.ik.solve(p, R) is not None
+
+    def describe(self) -> str:
+        c = self.chain
+        return f"{c.source}, {c.base_link} -> {c.tip_link} ({len(c.joint_names)} joints)"
+
+
+class _RobotReach(_Reach):
+    """By the robot's own check (:class:`~ftcomp.hardware.protocols.ChecksReachability`), its
+    TCP taken as the sensor frame."""
+
+    def __init__(self, args: argparse.Namespace, robot: Robot) -> None:
+        if not isinstance(robot, ChecksReachability):
+            raise ParameterError(
+                f"--robot {args.robot}: this robot cannot check whether it reaches a pose "
+                "(sim://... and ur://HOST can); give one of those, or --urdf ROBOT.urdf"
+            )
+        self.robot: ChecksReachability = robot
+        given = args.position_mm is not None
+        # Where the TCP is now, to the micrometre the pose file keeps (and without a -0).
+        p = _position_m(args.position_mm) if given else np.round(robot.pose().p_base_tcp, 6) + 0.0
+        super().__init__(f"--robot {args.robot}", args.robot, p)
+
+    def reaches(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> bool:
+        return self.robot.is_reachable(p, R)
+
+    def describe(self) -> str:
+        return self.who
 
 
 def _csv(R: NDArray[np.float64], ids: list[str], p: NDArray[np.float64] | None) -> str:
@@ -216,30 +248,43 @@ def _se_text(se: NDArray[np.float64], name: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Design, order, write, print the predicted standard errors."""
-    from ftcomp import paper
+    """Design, order, write, print the predicted standard errors (with ``--robot``, the robot is
+    open, as a context manager, until the design is written)."""
     from ftcomp.io.poses_csv import read_pose_file
 
     if args.count < 1:
         raise ParameterError(f"--count {args.count}: must be at least 1")
     if not math.isfinite(args.max_tilt_deg) or not 0.0 < args.max_tilt_deg <= 180.0:
         raise ParameterError(f"--max-tilt-deg {args.max_tilt_deg:g}: must be in (0, 180]")
-    for flag in ("base_link", "tip_link", "position_mm"):
+    for flag in ("base_link", "tip_link"):
         if getattr(args, flag) is not None and args.urdf is None:
             raise ParameterError(f"--{flag.replace('_', '-')} needs --urdf")
+    if args.position_mm is not None and args.urdf is None and args.robot is None:
+        raise ParameterError("--position-mm needs --urdf or --robot")
     inputs = [f for f in (args.keep, args.urdf) if f]
     output = check_writable(args.output, overwrite=args.force, inputs=inputs)
     kept = read_pose_file(args.keep) if args.keep else None
+    with contextlib.ExitStack() as stack:
+        reach: _Reach | None = None
+        if args.urdf:
+            reach = _UrdfReach(args)
+        elif args.robot:
+            from ftcomp.hardware.registry import open_robot
+
+            reach = _RobotReach(args, stack.enter_context(open_robot(args.robot)))
+        return _design(args, output, kept, reach)
+
+
+def _design(
+    args: argparse.Namespace, output: Path, kept: PoseList | None, reach: _Reach | None
+) -> int:
+    """Design ``args.count`` poses after ``kept``, write them to ``output``, print."""
+    from ftcomp import paper
+
     R_keep = kept.rotations.as_matrix().reshape(-1, 3, 3) if kept is not None else None
-    urdf = _UrdfReach(args) if args.urdf else None
     theta = nominal_theta()
     candidates = candidate_orientations(args.max_tilt_deg)
-    reachable, robot = _reachability(args.robot) if args.robot else (urdf, None)
-    try:
-        designed = design_poses(args.count, candidates, theta, keep=R_keep, reachable=reachable)
-    finally:
-        if robot is not None:
-            robot.__exit__(None, None, None)
+    designed = design_poses(args.count, candidates, theta, keep=R_keep, reachable=reach)
     n_keep = 0 if R_keep is None else len(R_keep)
     R_all = designed if R_keep is None else np.concatenate([R_keep, designed])
     order = order_for_travel(R_all, fixed_prefix=n_keep)
@@ -248,9 +293,9 @@ def run(args: argparse.Namespace) -> int:
     fresh = (f"d{k}" for k in range(1, args.count + len(taken) + 1) if f"d{k}" not in taken)
     ids = [*(kept.ids if kept is not None else ()), *(next(fresh) for _ in range(args.count))]
     ids = [ids[i] for i in order]
-    p_all = None  # with --urdf: where each pose is reached (kept poses: their own, if given)
-    if urdf is not None:
-        p_all = np.tile(urdf.p, (len(R_all), 1))
+    p_all = None  # with a reach check: where each pose is reached (kept poses: their own)
+    if reach is not None:
+        p_all = np.tile(reach.p, (len(R_all), 1))
         if kept is not None and kept.positions_base_m is not None:
             p_all[:n_keep] = kept.positions_base_m
         p_all = p_all[order]
@@ -261,13 +306,12 @@ def run(args: argparse.Namespace) -> int:
         f"{len(R_all)} poses ({n_keep} kept, {args.count} designed, max tilt "
         f"{np.degrees(tilt_from_down_rad(R_all)).max():.1f} deg) written to {output}"
     )
-    if urdf is not None:
-        print(urdf.summary())
-    if urdf is not None and p_all is not None:
+    if reach is not None and p_all is not None:
+        print(reach.summary())
         for pid, R, p in zip(ids, R_all, p_all, strict=True):
-            if pid in taken and urdf.ik.solve(p, R) is None:
+            if pid in taken and not reach.reaches(p, R):
                 print(
-                    f"warning: kept pose {pid}: the URDF's inverse kinematics does not reach it "
+                    f"warning: kept pose {pid}: {reach.who} does not reach it "
                     f"with the tip at {np.round(p, 4).tolist()} m",
                     file=sys.stderr,
                 )

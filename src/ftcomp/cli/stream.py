@@ -22,6 +22,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from typing import TYPE_CHECKING
 
 from ftcomp.cli.common import warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
@@ -31,6 +32,9 @@ from ftcomp.errors import ParameterError
 #: How long the readings' rate is measured when --online-rate-hz is not given [s]: the value of
 #: ftcomp.session.online_load.MEASURE_RATE_S (a test checks), here so --help needs no numpy.
 _MEASURE_S = 0.5
+
+if TYPE_CHECKING:
+    from ftcomp.hardware.protocols import Robot, StreamHealth
 
 __all__ = ["register", "run"]
 
@@ -68,19 +72,17 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.set_defaults(handler=run)
 
 
-def _health_text(health: dict[str, object] | None) -> str:
+def _health_text(health: StreamHealth | None) -> str:
     if health is None:
         return ""
     return (
-        f"; lost {health['lost_packets']} packets of "
-        f"{health['received'] + health['lost_packets']} "  # type: ignore[operator]
-        f"(last RDT sequence {health['last_rdt_sequence']})"
+        f"; lost {health.lost_packets} packets of {health.received + health.lost_packets} "
+        f"(last RDT sequence {health.last_sequence})"
     )
 
 
 def run(args: argparse.Namespace) -> int:
     """Open, stream, report."""
-    from ftcomp.hardware.protocols import KnowsPose
     from ftcomp.io.atomic import check_writable
     from ftcomp.io.calibration_json import load_calibration
     from ftcomp.session.online_load import event_lines
@@ -115,8 +117,8 @@ def run(args: argparse.Namespace) -> int:
             "fixed://?rpy_deg=R,P,Y for a sensor held still, ...)"
         )
 
-    def check_pose(robot: object) -> None:
-        if calibration is not None and isinstance(robot, KnowsPose) and not robot.pose_known:
+    def check_pose(robot: Robot) -> None:
+        if calibration is not None and not robot.pose_known:
             raise ParameterError(
                 f"{args.robot}: gives no pose to compensate with: add ?rpy_deg=R,P,Y (and xyz_mm)"
             )

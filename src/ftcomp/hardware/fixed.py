@@ -20,15 +20,16 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import HardwareError, ParameterError
-from ftcomp.hardware.pacing import RateLimiter
-from ftcomp.hardware.protocols import NothingToClose, PoseSample, Robot
+from ftcomp.hardware.pacing import LatenessOfPacer, RateLimiter
+from ftcomp.hardware.protocols import ClockName, NothingToClose, PoseSample, Robot
 from ftcomp.hardware.registry import Uri
 
 __all__ = ["FixedRobot", "open_robot"]
 
 
-class FixedRobot(NothingToClose):
-    """A robot that does not move (see the module docstring).
+class FixedRobot(LatenessOfPacer, NothingToClose):
+    """A robot that does not move (see the module docstring). Capabilities:
+    :class:`~ftcomp.hardware.protocols.ReportsLateness`.
 
     Args:
         p_base_tcp: the TCP position [m], base frame.
@@ -37,7 +38,7 @@ class FixedRobot(NothingToClose):
         pose_known: whether the pose was given (compensation needs it).
     """
 
-    clock_name = "monotonic"
+    clock_name: ClockName = "monotonic"
 
     def __init__(
         self,
@@ -56,11 +57,6 @@ class FixedRobot(NothingToClose):
     def control_period_s(self) -> float:
         """The loop period [s]."""
         return self.pacer.period_s
-
-    @property
-    def late_in_a_row(self) -> int:
-        """Periods missed in a row up to now."""
-        return self.pacer.late_in_a_row
 
     def now_ns(self) -> int:
         """The host's monotonic clock [ns]."""

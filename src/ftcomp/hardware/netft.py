@@ -35,7 +35,7 @@ import numpy as np
 
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.pacing import on_host_clock
-from ftcomp.hardware.protocols import Robot, WrenchSample, WrenchSensor
+from ftcomp.hardware.protocols import Robot, StreamHealth, WrenchSample, WrenchSensor
 from ftcomp.hardware.registry import Uri
 
 if TYPE_CHECKING:
@@ -76,7 +76,9 @@ def _import_pynetft() -> Any:
 
 
 class NetFTSensor:
-    """An ATI Net F/T sensor streaming over RDT (see the module docstring).
+    """An ATI Net F/T sensor streaming over RDT (see the module docstring). Capabilities:
+    :class:`~ftcomp.hardware.protocols.CountsLostPackets`,
+    :class:`~ftcomp.hardware.protocols.ReportsStreamHealth`.
 
     Args:
         uri: the parsed ``netft://`` URI (for messages).
@@ -239,16 +241,17 @@ class NetFTSensor:
         """The rate samples arrive at [Hz], as pynetft measures it."""
         return float(self._client.health().receive_rate_hz)
 
-    def stream_health(self) -> dict[str, Any]:
-        """One consistent snapshot: lost, received, last RDT sequence, rate and the units."""
+    def stream_health(self) -> StreamHealth:
+        """One consistent snapshot: received, lost, the last RDT sequence, rate and the units."""
         health = self._client.health()
-        return {
-            "lost_packets": int(health.lost_count),
-            "received": int(health.received_count),
-            "last_rdt_sequence": health.last_rdt_sequence,
-            "rate_hz": float(health.receive_rate_hz),
-            "units": self._units,
-        }
+        return StreamHealth(
+            received=int(health.received_count),
+            lost_packets=int(health.lost_count),
+            last_sequence=health.last_rdt_sequence,
+            rate_hz=float(health.receive_rate_hz),
+            force_unit=self._units[0],
+            torque_unit=self._units[1],
+        )
 
 
 def _positive(uri: Uri, name: str, value: float | None) -> float:

@@ -4,11 +4,8 @@ A real robot's :meth:`~ftcomp.hardware.protocols.Robot.wait_cycle` blocks until 
 starts. :class:`RateLimiter` keeps that schedule on :func:`time.perf_counter`, reports its slack
 and counts late periods, so a loop can treat a robot that falls behind as a fault
 (``late_in_a_row``); it never raises itself. The same limiter holds any loop to wall-clock time
-(:class:`ftcomp.control.loop.ControlCycle`).
-
-Also here: the optional capabilities a backend may offer beyond the protocols (a loop asks with
-``isinstance``): :class:`CountsLostPackets` for a streaming sensor that numbers its packets and
-:class:`ChecksReachability` for a robot that can tell, before moving, whether it can reach a pose.
+(:class:`ftcomp.control.loop.ControlCycle`). :class:`LatenessOfPacer` makes a robot that waits on
+its limiter report its lateness (:class:`~ftcomp.hardware.protocols.ReportsLateness`).
 """
 
 from __future__ import annotations
@@ -16,16 +13,13 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from typing import Protocol, runtime_checkable
-
-import numpy as np
-from numpy.typing import NDArray
 
 from ftcomp.errors import ParameterError
+from ftcomp.hardware.protocols import HOST_CLOCK, Robot
 
 _log = logging.getLogger(__name__)
 
-__all__ = ["ChecksReachability", "CountsLostPackets", "RateLimiter", "on_host_clock"]
+__all__ = ["LatenessOfPacer", "RateLimiter", "on_host_clock"]
 
 
 class RateLimiter:
@@ -91,37 +85,29 @@ class RateLimiter:
         return slack
 
 
-def on_host_clock(robot: object) -> bool:
+class LatenessOfPacer:
+    """The :class:`~ftcomp.hardware.protocols.ReportsLateness` capability of a robot whose
+    :meth:`~ftcomp.hardware.protocols.Robot.wait_cycle` waits on its ``pacer`` (a mixin)."""
+
+    pacer: RateLimiter
+
+    @property
+    def late_in_a_row(self) -> int:
+        """Control periods missed in a row up to now."""
+        return self.pacer.late_in_a_row
+
+    @property
+    def late_cycles(self) -> int:
+        """Cycles that overran their period since the start."""
+        return self.pacer.overruns
+
+    @property
+    def worst_lateness_s(self) -> float:
+        """The largest overrun seen [s] (0 when none)."""
+        return max(0.0, -self.pacer.worst_slack_s)
+
+
+def on_host_clock(robot: Robot) -> bool:
     """Whether a robot's clock is the host's monotonic clock (that of sensors stamped on
-    arrival): as it declares (``clock_name``), or else as its ``now_ns()`` reads (within 1 s)."""
-    name = getattr(robot, "clock_name", None)
-    if name is not None:
-        return bool(name == "monotonic")
-    now_ns = getattr(robot, "now_ns", None)
-    return now_ns is not None and abs(now_ns() - time.monotonic_ns()) < 1_000_000_000
-
-
-@runtime_checkable
-class CountsLostPackets(Protocol):
-    """A streaming sensor that numbers its packets and so knows how many never arrived."""
-
-    @property
-    def lost_packets(self) -> int:
-        """Packets lost since the stream started."""
-        ...
-
-    @property
-    def rate_hz(self) -> float:
-        """The measured rate of arriving samples [Hz]."""
-        ...
-
-
-@runtime_checkable
-class ChecksReachability(Protocol):
-    """A robot that can check a target before moving (inverse kinematics, safety limits)."""
-
-    def is_reachable(
-        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
-    ) -> bool:
-        """Whether the TCP can be brought to this pose (base frame) within the robot's limits."""
-        ...
+    arrival), as it declares (:attr:`~ftcomp.hardware.protocols.Robot.clock_name`)."""
+    return robot.clock_name == HOST_CLOCK

@@ -14,6 +14,23 @@ backends use the host's monotonic clock (:func:`time.monotonic_ns`), stamping ea
 it arrives; the simulated cell uses its simulation time. Seconds (float) appear only in
 arithmetic.
 
+Capabilities beyond these protocols are protocols too, all here, checked with ``isinstance``
+(never by probing attributes); which backend has which:
+
+=========================  =====================================================================
+capability                 backends that have it
+=========================  =====================================================================
+:class:`TakesControl`      ``ur://`` (uploads its control script before the first motion)
+:class:`ReportsLateness`   ``ur://``, ``fixed://`` (robots paced on the host's clock)
+:class:`ChecksReachability`  ``ur://`` (IK and safety limits), ``sim://`` (the cell's IK)
+:class:`CountsLostPackets`  ``netft://`` (RDT sequence numbers)
+:class:`ReportsStreamHealth`  ``netft://``
+=========================  =====================================================================
+
+Two things every robot states (members of :class:`Robot`, not capabilities): its clock
+(:attr:`Robot.clock_name`) and whether its pose is the sensor's real pose
+(:attr:`Robot.pose_known`: ``fixed://`` without a pose has a placeholder pose).
+
 Frames and units (``docs/conventions.md``): a robot reports the pose of its *TCP* (or flange)
 in its base frame; the sensor frame is fixed to the TCP by a :class:`Mount`, which is the one
 place where ``R_base_sensor = R_base_tcp @ R_tcp_sensor`` is computed. Wrenches are what the tool
@@ -26,7 +43,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from types import TracebackType
-from typing import Any, Protocol, Self, TypeVar, runtime_checkable
+from typing import Final, Literal, Protocol, Self, TypeVar, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,7 +51,29 @@ from numpy.typing import ArrayLike, NDArray
 from ftcomp.arrays import freeze_field
 from ftcomp.errors import ParameterError
 
-__all__ = ["Mount", "NothingToClose", "PoseSample", "Robot", "WrenchSample", "WrenchSensor"]
+__all__ = [
+    "HOST_CLOCK",
+    "ChecksReachability",
+    "ClockName",
+    "CountsLostPackets",
+    "Mount",
+    "NothingToClose",
+    "PoseSample",
+    "ReportsLateness",
+    "ReportsStreamHealth",
+    "Robot",
+    "StreamHealth",
+    "TakesControl",
+    "WrenchSample",
+    "WrenchSensor",
+]
+
+#: The clocks a robot's :meth:`~Robot.now_ns` may run on: the host's monotonic clock
+#: (:func:`time.monotonic_ns`, that of sensors stamped on arrival), a simulation's time, or a
+#: replayed recording's time.
+ClockName = Literal["monotonic", "simulation", "replay"]
+#: The host's monotonic clock.
+HOST_CLOCK: Final = "monotonic"
 
 _NS_PER_S = 1_000_000_000
 _SensorT = TypeVar("_SensorT", bound="WrenchSensor")
@@ -246,6 +285,18 @@ class Robot(Protocol):
         """Period of the control cycle [s]."""
         ...
 
+    @property
+    def clock_name(self) -> ClockName:
+        """The clock of :meth:`now_ns` and of every stamp (see :data:`ClockName`)."""
+        ...
+
+    @property
+    def pose_known(self) -> bool:
+        """Whether :meth:`pose` is the TCP's real pose (measured, recorded or given by the user);
+        False for a robot that only paces the loop (``fixed://`` given no pose), whose pose is a
+        placeholder that must not be used to compensate."""
+        ...
+
     def __enter__(self: _RobotT) -> _RobotT:
         """Connect."""
         ...
@@ -298,30 +349,124 @@ class Robot(Protocol):
         ...
 
 
+@runtime_checkable
+class TakesControl(Protocol):
+    """A robot whose control side is connected apart from its state, on first motion or when
+    asked: a caller about to move it connects first, so the first cycle is not late.
+
+    Backends: ``ur://`` (uploads ur_rtde's URScript program, about a second).
+    """
+
+    def connect_control(self) -> None:
+        """Take control of the arm now (idempotent).
+
+        Raises:
+            HardwareError: the controller refuses (not in remote control, program stopped...).
+        """
+        ...
+
+
+@runtime_checkable
+class ReportsLateness(Protocol):
+    """A robot that waits for its control periods on the host's clock and counts the periods
+    its caller missed (a loop treats ``late_in_a_row`` beyond a limit as a fault).
+
+    Backends: ``ur://``, ``fixed://`` (by :class:`ftcomp.hardware.pacing.RateLimiter`). Not
+    ``sim://`` (simulated time is never late) nor ``replay://`` (a dry run).
+    """
+
+    @property
+    def late_in_a_row(self) -> int:
+        """Periods missed in a row up to now (0 after a period on time)."""
+        ...
+
+    @property
+    def late_cycles(self) -> int:
+        """Cycles that overran their period since the robot was opened."""
+        ...
+
+    @property
+    def worst_lateness_s(self) -> float:
+        """The largest overrun seen [s] (0 when none)."""
+        ...
+
+
+@runtime_checkable
+class ChecksReachability(Protocol):
+    """A robot that can check a target before moving (inverse kinematics, safety limits).
+
+    Backends: ``ur://`` (the controller's inverse kinematics and safety limits; connects the
+    control side), ``sim://`` (the cell's inverse kinematics within the joint ranges).
+    """
+
+    def is_reachable(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
+    ) -> bool:
+        """Whether the TCP can be brought to this pose (base frame [m]) within the robot's
+        limits."""
+        ...
+
+
+@runtime_checkable
+class CountsLostPackets(Protocol):
+    """A streaming sensor that numbers its packets and so knows how many never arrived.
+
+    Backends: ``netft://`` (RDT sequence numbers).
+    """
+
+    @property
+    def lost_packets(self) -> int:
+        """Packets lost since the stream started."""
+        ...
+
+    @property
+    def rate_hz(self) -> float:
+        """The measured rate of arriving samples [Hz]."""
+        ...
+
+
+@dataclass(frozen=True)
+class StreamHealth:
+    """One consistent snapshot of a sensor stream's health.
+
+    Attributes:
+        received: packets received since the stream started.
+        lost_packets: packets lost since then (gaps in the sequence numbers).
+        last_sequence: the device's sequence number of the newest packet (None before one).
+        rate_hz: the measured rate of arriving samples [Hz].
+        force_unit: the device's force unit, as it names it (readings are converted to N).
+        torque_unit: its torque unit (readings are converted to N*m).
+    """
+
+    received: int
+    lost_packets: int
+    last_sequence: int | None
+    rate_hz: float
+    force_unit: str
+    torque_unit: str
+
+    def __post_init__(self) -> None:
+        if self.received < 0 or self.lost_packets < 0:
+            raise ParameterError(
+                f"packet counts must be >= 0, got received={self.received}, "
+                f"lost_packets={self.lost_packets}"
+            )
+
+
+@runtime_checkable
+class ReportsStreamHealth(Protocol):
+    """A streaming sensor that reports its stream's health in one snapshot.
+
+    Backends: ``netft://``.
+    """
+
+    def stream_health(self) -> StreamHealth:
+        """The health now."""
+        ...
+
+
 def seconds_to_ns(t_s: float) -> int:
     """``t_s`` [s] as integer nanoseconds (rounded to the nearest)."""
     if not math.isfinite(t_s):
         raise ParameterError(f"a time stamp must be finite, got {t_s}")
     return round(t_s * _NS_PER_S)
-
-
-# TEMPORARY (lead's worktree): replaced by the protocols helper's definitions at merge.
-@runtime_checkable
-class TakesControl(Protocol):
-    def connect_control(self) -> None: ...
-
-
-@runtime_checkable
-class ReportsLateness(Protocol):
-    @property
-    def late_in_a_row(self) -> int: ...
-
-
-@runtime_checkable
-class ReportsStreamHealth(Protocol):
-    def stream_health(self) -> dict[str, Any]: ...
-
-
-@runtime_checkable
-class KnowsPose(Protocol):
-    pose_known: bool

@@ -30,6 +30,7 @@ from ftcomp.errors import HardwareError, InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, rotation_from_encoding
 from ftcomp.hardware.pacing import RateLimiter, on_host_clock
 from ftcomp.hardware.protocols import (
+    ClockName,
     NothingToClose,
     PoseSample,
     Robot,
@@ -133,7 +134,8 @@ class _Clock:
 class ReplayRobot(NothingToClose):
     """Replays the recorded poses; the session's clock is the recording's."""
 
-    clock_name = "replay"
+    clock_name: ClockName = "replay"
+    pose_known = True
 
     def __init__(self, log: ReplayLog, speed: float) -> None:
         if log.R is None:

@@ -43,8 +43,8 @@ from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
 from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
-from ftcomp.hardware.pacing import RateLimiter
-from ftcomp.hardware.protocols import PoseSample, Robot
+from ftcomp.hardware.pacing import LatenessOfPacer, RateLimiter
+from ftcomp.hardware.protocols import ClockName, PoseSample, Robot
 from ftcomp.hardware.registry import Uri
 from ftcomp.hardware.rtde_probe import probe_rtde
 
@@ -73,8 +73,11 @@ def _pose_list(p: NDArray[np.float64], R: NDArray[np.float64]) -> list[float]:
     return [*map(float, p), *rotvec_from_matrix(R)]
 
 
-class URRobot:
-    """A UR arm over RTDE (see the module docstring for the URI and the frames).
+class URRobot(LatenessOfPacer):
+    """A UR arm over RTDE (see the module docstring for the URI and the frames). Capabilities:
+    :class:`~ftcomp.hardware.protocols.TakesControl`,
+    :class:`~ftcomp.hardware.protocols.ReportsLateness`,
+    :class:`~ftcomp.hardware.protocols.ChecksReachability`.
 
     Args:
         uri: the parsed URI (for messages).
@@ -86,7 +89,8 @@ class URRobot:
         connect_timeout_s: the connection check's time limit [s].
     """
 
-    clock_name = "monotonic"
+    clock_name: ClockName = "monotonic"
+    pose_known = True
 
     def __init__(
         self,
@@ -123,11 +127,6 @@ class URRobot:
     def control_period_s(self) -> float:
         """The control period [s] (1 / the RTDE frequency)."""
         return self.pacer.period_s
-
-    @property
-    def late_in_a_row(self) -> int:
-        """Control periods missed in a row up to now (see :class:`.pacing.RateLimiter`)."""
-        return self.pacer.late_in_a_row
 
     def __enter__(self) -> URRobot:
         """Check the controller answers, then connect ``ur_rtde``'s receive interface."""

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.errors import HardwareError, ParameterError
-from ftcomp.hardware.protocols import PoseSample, Robot, WrenchSample, WrenchSensor
+from ftcomp.hardware.protocols import ClockName, PoseSample, Robot, WrenchSample, WrenchSensor
 from ftcomp.hardware.registry import Uri
 from ftcomp.ros2.dds_types import TFMessage, WrenchStamped, dds_topic, wrench_message, wrench_of
 from ftcomp.ros2.tf import TransformRecord, TransformTree, clean_frame
@@ -188,6 +188,9 @@ class Ros2PoseSource:
         period_s: the loop period ``wait_cycle`` sleeps [s].
         timeout_s: how long entering waits for the two frames to be connected [s].
     """
+
+    clock_name: ClockName = "monotonic"
+    pose_known = True
 
     def __init__(
         self,

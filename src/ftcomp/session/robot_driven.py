@@ -3,7 +3,7 @@
 :func:`record_poses` drives the robot through a :class:`~ftcomp.samples.PoseList` with
 :func:`ftcomp.calibration.collect.record_static`, one pose at a time: it checks every pose is
 reachable before the first move (when the robot can tell, see
-:class:`~ftcomp.hardware.pacing.ChecksReachability`), moves, waits for the arm to come to rest,
+:class:`~ftcomp.hardware.protocols.ChecksReachability`), moves, waits for the arm to come to rest,
 records ``samples_per_pose`` readings and re-records while the readings still drift (the
 wrench has not settled). Each finished pose goes to ``on_pose`` as a
 :class:`~ftcomp.session.pose_record.PoseRecord` at once, so a caller can write it out before
@@ -23,8 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.calibration.collect import record_static
 from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
-from ftcomp.hardware.pacing import ChecksReachability
-from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
+from ftcomp.hardware.protocols import ChecksReachability, Mount, Robot, WrenchSensor
 from ftcomp.samples import PoseList
 from ftcomp.session.pose_record import PoseRecord, WrenchTolerance, is_settled, wrench_drift
 

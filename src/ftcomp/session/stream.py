@@ -17,7 +17,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,12 +26,12 @@ from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.loop import ControlCycle, Reading, run_loop
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import quat_from_matrix
-from ftcomp.hardware.pacing import CountsLostPackets
 from ftcomp.hardware.protocols import (
-    KnowsPose,
+    CountsLostPackets,
     Mount,
     ReportsStreamHealth,
     Robot,
+    StreamHealth,
     WrenchSensor,
 )
 from ftcomp.hardware.replay import EndOfReplayError
@@ -214,7 +213,7 @@ class StreamResult:
     readings: int
     elapsed_s: float
     log: Path
-    health: dict[str, Any] | None = None
+    health: StreamHealth | None = None
     online_rate_hz: float = math.nan
     online_rate_source: str = ""
     load_events: tuple[LoadEvent, ...] = ()
@@ -257,7 +256,7 @@ def stream(
         ParameterError: compensation or a pose asked of a robot that reports none, or an online
             load estimate with a weightless tool.
     """
-    knows_pose = not isinstance(robot, KnowsPose) or robot.pose_known
+    knows_pose = robot.pose_known
     if calibration is not None and not knows_pose:
         raise ParameterError("compensation needs the sensor's pose: the robot reports none")
     if config.online_load:

@@ -38,7 +38,14 @@ from ftcomp.sim.sensor import SensorSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS
 from ftcomp.sim.tool import LoadSpec
 
-__all__ = ["MAX_LOAD_KG", "open_robot", "open_sensor", "scene_from_uri", "sensor_spec_from_uri"]
+__all__ = [
+    "MAX_LOAD_KG",
+    "as_sim_cell",
+    "open_robot",
+    "open_sensor",
+    "scene_from_uri",
+    "sensor_spec_from_uri",
+]
 
 #: Largest load the simulated arm takes [kg] (the C4-A901S is rated for 4 kg).
 MAX_LOAD_KG = 4.0
@@ -145,12 +152,26 @@ def open_robot(uri: Uri) -> Robot:
     return cell
 
 
+def as_sim_cell(robot: Robot | None, needs: str) -> SimCell:
+    """The session's robot as the simulated cell, for what only the simulation has (its own
+    sensor, the ground truth).
+
+    Args:
+        robot: the session's robot (None: no robot).
+        needs: who needs the cell, for the message (e.g. ``"'sim://': the simulated sensor"``).
+
+    Raises:
+        ParameterError: the robot is not ``sim://``.
+    """
+    if not isinstance(robot, SimCell):
+        raise ParameterError(f"{needs} needs --robot sim://")
+    return robot
+
+
 def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
     """The wrist sensor of the session's simulated cell."""
     if uri.options or uri.host or uri.path:
         raise ParameterError(
             f"{uri.text!r}: the simulated sensor takes no options; give them to --robot sim://"
         )
-    if not isinstance(robot, SimCell):
-        raise ParameterError(f"{uri.text!r}: the simulated sensor needs --robot sim://")
-    return robot.sensor
+    return as_sim_cell(robot, f"{uri.text!r}: the simulated sensor").sensor

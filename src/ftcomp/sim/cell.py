@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.errors import ParameterError, SimulationError
-from ftcomp.hardware.protocols import PoseSample
+from ftcomp.hardware.protocols import ClockName, PoseSample
 from ftcomp.sim.arm import ARM_JOINT_NAMES
 from ftcomp.sim.gripper import SURFACE_GEOMS, GripperAndSurfaces
 from ftcomp.sim.ik import DifferentialIK
@@ -50,7 +50,8 @@ _BADQACC: Final = int(mujoco.mjtWarning.mjWARN_BADQACC)
 
 
 class SimCell(ArmMotion, GripperAndSurfaces):
-    """A MuJoCo robot cell implementing the :class:`~ftcomp.hardware.protocols.Robot` protocol.
+    """A MuJoCo robot cell implementing the :class:`~ftcomp.hardware.protocols.Robot` protocol,
+    with the capability :class:`~ftcomp.hardware.protocols.ChecksReachability` (the cell's IK).
 
     Args:
         config: the scene (tilt, gripper, load, surface...). Default: level base, gripper,
@@ -181,6 +182,10 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         return self._q_cmd.copy()
 
     # ----------------------------------------------------------------- Robot protocol
+    #: Every stamp is simulation time; the pose is the simulated sensor frame's.
+    clock_name: ClockName = "simulation"
+    pose_known = True
+
     def __enter__(self) -> SimCell:
         """Nothing to connect: the cell is built."""
         return self

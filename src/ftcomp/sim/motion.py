@@ -25,6 +25,10 @@ __all__ = ["HOME_Q_RAD", "ArmMotion", "CycleCallback"]
 #: second seed of every IK solve.
 HOME_Q_RAD: Final = (0.0, 0.0, 0.6, 0.0, math.pi / 2 - 0.6, 0.0)
 
+#: Seeds the random IK starts of a reachability check (its own generator, so a check does not
+#: change the starts of later moves).
+_REACH_CHECK_SEED: Final = 20200302
+
 #: Called after every control cycle of a blocking move (e.g. to record readings).
 CycleCallback = Callable[[Any], None]
 
@@ -122,13 +126,40 @@ class ArmMotion:
         self.move_joints(q, duration_s, on_cycle=on_cycle)
 
     # ----------------------------------------------------------------- kinematics
+    def is_reachable(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
+    ) -> bool:
+        """Whether inverse kinematics puts the TCP (the sensor frame) at this base-frame pose
+        within the joint ranges (the :class:`~ftcomp.hardware.protocols.ChecksReachability`
+        capability). Checking moves nothing and leaves later moves' IK seeds as they were.
+
+        Raises:
+            ParameterError: not a position (3,) [m] and a rotation (3, 3).
+        """
+        try:
+            self.solve_ik(p_base_tcp, R_base_tcp, rng=np.random.default_rng(_REACH_CHECK_SEED))
+        except UnreachablePoseError:
+            return False
+        return True
+
     def solve_ik(
-        self, p_base_sensor: ArrayLike, R_base_sensor: ArrayLike, *, label: str = ""
+        self,
+        p_base_sensor: ArrayLike,
+        R_base_sensor: ArrayLike,
+        *,
+        label: str = "",
+        rng: np.random.Generator | None = None,
     ) -> NDArray[np.float64]:
         """Joint positions [rad] putting the sensor frame at a base-frame pose.
 
         Tries the current command first (the nearest solution), then fixed and random seeds
         (a fixed generator: the same pose gives the same answer whatever the noise seed).
+
+        Args:
+            p_base_sensor: position [m], base frame, (3,).
+            R_base_sensor: orientation, (3, 3).
+            label: names the pose in an error message.
+            rng: draws the random seeds (default: the cell's own generator, which advances).
 
         Raises:
             UnreachablePoseError: no seed converges within the joint ranges.
@@ -142,8 +173,9 @@ class ArmMotion:
             raise ParameterError(f"{label or 'pose'}: R_base_sensor is not a rotation matrix")
         Rwb = self._R_world_base
         span = self._upper - self._lower
+        draw = self._ik_rng if rng is None else rng
         seeds = [self._q_cmd, np.array(HOME_Q_RAD)]
-        seeds += [self._lower + span * self._ik_rng.random(6) for _ in range(30)]
+        seeds += [self._lower + span * draw.random(6) for _ in range(30)]
         mujoco.mj_copyData(self._scratch, self._model, self._data)
         q = solve_pose(
             self._model,
