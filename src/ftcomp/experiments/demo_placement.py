@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ftcomp import paper
-from ftcomp.calibration.identify import Calibration
+from ftcomp.calibration_record import Calibration
 from ftcomp.experiments.placement import run_placement, sweep_gains, write_placement_outputs
 from ftcomp.experiments.placement_config import DEFAULT_GAINS, PlacementConfig, PlacementResult
 from ftcomp.io.calibration_json import model_to_dict

@@ -15,7 +15,7 @@ accepts more (``3_3445`` as 33445, ``١٢``, ``infinity``); those are errors her
 ``inf`` are read only to be rejected as not finite.
 
 **Limits.** A force beyond 1e6 N or a torque beyond 1e5 N*m is no sensor's reading (an error
-without a sensor range too; :mod:`ftcomp.calibration.outliers`). Lines are bounded
+without a sensor range too; :mod:`ftcomp.constants`). Lines are bounded
 (:mod:`ftcomp.io.chunks`); the header must be the first line (a blank first line is an error).
 """
 
@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.outliers import PLAUSIBLE_FORCE_N, PLAUSIBLE_TORQUE_NM
+from ftcomp.constants import PLAUSIBLE_FORCE_N, PLAUSIBLE_TORQUE_NM
 from ftcomp.errors import InputFileError
 from ftcomp.frames import ENCODING_COLUMNS, OrientationEncoding
 from ftcomp.io.chunks import csv_rows
