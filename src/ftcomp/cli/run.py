@@ -179,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from ftcomp.io.atomic import atomic_output, check_writable
     from ftcomp.io.calibration_json import load_calibration
-    from ftcomp.io.numtext import format_row
+    from ftcomp.io.timestamps import format_row
 
     _check(args)
     output = check_writable(args.output, overwrite=args.force, inputs=[args.calibration])

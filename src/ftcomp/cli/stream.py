@@ -103,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.hardware.replay import EndOfReplayError
     from ftcomp.io.atomic import atomic_output, check_writable
     from ftcomp.io.calibration_json import load_calibration
-    from ftcomp.io.numtext import format_row
+    from ftcomp.io.timestamps import format_row
 
     if not (math.isfinite(args.seconds) and args.seconds > 0.0):
         raise ParameterError(f"--seconds must be > 0, got {args.seconds:g}")

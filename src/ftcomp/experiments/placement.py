@@ -359,7 +359,7 @@ def write_placement_outputs(
         The paths written, by kind (``"csv"``, ``"metrics"``, ``"plot"``).
     """
     from ftcomp.io.atomic import atomic_write_text
-    from ftcomp.io.timeseries import write_timeseries_csv
+    from ftcomp.io.tables import write_timeseries_csv
     from ftcomp.report.figures import plot_placement
 
     out = Path(out_dir)
