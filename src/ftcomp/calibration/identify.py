@@ -33,6 +33,7 @@ __all__ = [
     "model_from_theta",
     "pose_groups",
     "pose_means",
+    "relative_error_percent",
     "standard_errors_from_fit",
 ]
 
@@ -213,6 +214,17 @@ def model_from_theta(theta: NDArray[np.float64]) -> GravityModel:
     return GravityModel.from_gravity_in_base(theta[0:3], theta[9:12], theta[3:6], theta[6:9])
 
 
+def relative_error_percent(
+    residuals: NDArray[np.float64], wrench_mean: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The paper's Table 3: ``100 |residual| / |wrench_mean|`` per pose and axis, (P, 6); NaN
+    where the mean reading is 0 (no relative error can be measured)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        relative = 100.0 * np.abs(residuals) / np.abs(wrench_mean)
+    relative[~np.isfinite(relative)] = np.nan
+    return relative
+
+
 def calibrate(
     samples: Samples, *, method: Method = "joint", leave_one_out: bool = True
 ) -> Calibration:
@@ -242,9 +254,7 @@ def calibrate(
     model = model_from_theta(fit.theta)
     std_errors = standard_errors_from_fit(fit.theta, fit.covariance)
     residuals = wrench - model.predict(R)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        relative = 100.0 * np.abs(residuals) / np.abs(wrench)
-    relative[~np.isfinite(relative)] = np.nan
+    relative = relative_error_percent(residuals, wrench)
 
     loo = np.full_like(wrench, np.nan)
     if leave_one_out:

@@ -23,6 +23,7 @@ from ftcomp.calibration.identify import (
     calibrate,
     model_from_theta,
     pose_means,
+    relative_error_percent,
     standard_errors_from_fit,
 )
 from ftcomp.calibration.methods import fit_paper, joint_sigma
@@ -91,9 +92,6 @@ def calibrate_extended(
     if drift is not None and times is not None:
         predicted = predicted + drift.offset(times.t_s)
     residuals = wrench - predicted
-    with np.errstate(divide="ignore", invalid="ignore"):
-        relative = 100.0 * np.abs(residuals) / np.abs(wrench)
-    relative[~np.isfinite(relative)] = np.nan
     loo = np.full_like(wrench, np.nan)
     if leave_one_out and needed < P:
         loo = _leave_one_out(wrench, R, sigma, fit.x, tau, order, identify_mount)
@@ -105,7 +103,7 @@ def calibrate_extended(
         model=model,
         std_errors=std_errors,
         residuals=residuals,
-        relative_error_percent=relative,
+        relative_error_percent=relative_error_percent(residuals, wrench),
         loo_error=loo,
         warnings=tuple(warnings),
         bias_drift=drift,
