@@ -14,7 +14,7 @@ __version__ = "0.1.0"
 
 #: Public name -> the module that defines it.
 _EXPORTS = {
-    "Calibration": "ftcomp.calibration.identify",
+    "Calibration": "ftcomp.calibration_record",
     "FtcompError": "ftcomp.errors",
     "GravityCompensator": "ftcomp.compensation.compensator",
     "GravityModel": "ftcomp.model",
@@ -22,7 +22,7 @@ _EXPORTS = {
     "Mount": "ftcomp.hardware.protocols",
     "R_base_sensor_from": "ftcomp.frames",
     "Samples": "ftcomp.samples",
-    "StandardErrors": "ftcomp.calibration.identify",
+    "StandardErrors": "ftcomp.calibration_record",
     "calibrate": "ftcomp.calibration.identify",
     "estimate_load": "ftcomp.compensation.load",
     "load_calibration": "ftcomp.io.calibration_json",
@@ -55,7 +55,8 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from ftcomp.calibration.identify import Calibration, StandardErrors, calibrate
+    from ftcomp.calibration.identify import calibrate
+    from ftcomp.calibration_record import Calibration, StandardErrors
     from ftcomp.compensation.compensator import GravityCompensator
     from ftcomp.compensation.load import LoadEstimate, estimate_load
     from ftcomp.errors import FtcompError

@@ -7,6 +7,9 @@ ftcomp spells a published number: the simulated cell's defaults, the demo's comp
 CLI's defaults all read them here.
 
 This module imports only the standard library at load time (the CLI reads its defaults here).
+It sits in the layer of calibration and compensation, above the file formats
+(docs/architecture.md): :func:`paper_samples` reads the shipped readings with
+:func:`ftcomp.io.samples_csv.read_samples` (imported when called).
 
 Print where the shipped data files are: ``python -m ftcomp.paper``.
 """

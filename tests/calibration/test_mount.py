@@ -7,8 +7,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from calibration.drift_data import readings, tilted_poses, truth
-from ftcomp.calibration.drift import calibrate_extended
 from ftcomp.calibration.identify import calibrate
+from ftcomp.calibration.identify_extended import calibrate_extended
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.errors import IdentificationError
 

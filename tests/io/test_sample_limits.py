@@ -14,7 +14,7 @@ import pyarrow.parquet as pq
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.outliers import PLAUSIBLE_FORCE_N, PLAUSIBLE_TORQUE_NM
+from ftcomp.constants import PLAUSIBLE_FORCE_N, PLAUSIBLE_TORQUE_NM
 from ftcomp.errors import InputFileError
 from ftcomp.io.chunks import MAX_HEADER_BYTES, MAX_LINE_BYTES, iter_line_chunks
 from ftcomp.io.samples_csv import read_samples

@@ -12,8 +12,8 @@ from scipy.spatial.transform import Rotation
 from ftcomp.errors import InputFileError
 from ftcomp.frames import ENCODING_COLUMNS
 from ftcomp.io import samples_csv
-from ftcomp.io.sample_format import SampleLayout, check_header, parse_rows
-from ftcomp.io.samples_csv import SampleCsvReader, read_samples, write_samples
+from ftcomp.io.sample_format import SampleLayout, check_header
+from ftcomp.io.samples_csv import SampleCsvReader, parse_rows, read_samples, write_samples
 
 GOOD_HEADER = "pose,alpha_deg,beta_deg,gamma_deg,fx,fy,fz,tx,ty,tz"
 GOOD_ROWS = [

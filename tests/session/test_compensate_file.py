@@ -11,8 +11,8 @@ import pyarrow.parquet as pq
 import pytest
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.drift import BiasDrift
-from ftcomp.calibration.identify import Calibration, calibrate
+from ftcomp.calibration.identify import calibrate
+from ftcomp.calibration_record import BiasDrift, Calibration
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.errors import ParameterError
 from ftcomp.io.calibration_json import save_calibration

@@ -1,7 +1,35 @@
 """Calibration: identify sensor bias, tool weight and centre of gravity, and base tilt.
 
-- :mod:`.identify`: :func:`calibrate` and the :class:`Calibration` it returns (standard errors,
-  residuals, Table 3, leave-one-pose-out).
-- :mod:`.methods`: the paper's two-stage linear least squares and the joint weighted fit.
-- :mod:`.collect`: static readings at a list of poses from any robot and sensor.
+It produces the records of :mod:`ftcomp.calibration_record`
+(:class:`~ftcomp.calibration_record.Calibration` and what it carries); :mod:`ftcomp.io` writes
+them, :mod:`ftcomp.compensation` applies them.
+
+- :mod:`.identify`: :func:`~.identify.calibrate` (the paper's method or the joint fit, with
+  standard errors, residuals, Table 3, leave-one-pose-out) and the grouping of readings by pose.
+- :mod:`.methods`: the paper's two-stage linear least squares and the joint weighted fit;
+  :mod:`.loo`: leave-one-pose-out; :mod:`.outliers`: absurd readings and fits, outlier poses.
+- :mod:`.identify_extended`: :func:`~.identify_extended.calibrate_extended`, the joint fit with a
+  drifting bias (:mod:`.drift`) and/or an unknown mount rotation (:mod:`.mount`), on the fit of
+  :mod:`.extended`; :mod:`.rebias`: the bias alone from still readings.
+- :mod:`.dynamic`: the tool's inertia tensor from a fast excitation trajectory.
+- :mod:`.design`: D-optimal calibration poses; :mod:`.collect`: static readings at a list of
+  poses from any robot and sensor.
+
+The package imports none of its modules (``__all__`` names them), so a command loads only the
+ones it uses.
 """
+
+__all__ = [
+    "collect",
+    "design",
+    "drift",
+    "dynamic",
+    "extended",
+    "identify",
+    "identify_extended",
+    "loo",
+    "methods",
+    "mount",
+    "outliers",
+    "rebias",
+]

@@ -6,19 +6,19 @@ over is ``-(I alpha + w x I w)`` after removing the centre of gravity's accelera
 (:func:`ftcomp.kinematics.inertial_wrench`), linear in the six parameters of ``I`` (about the
 centre of gravity, sensor axes). :func:`identify_inertia` fits them by least squares over a
 recording (wrench, sensor pose, evenly spaced times) and refuses a recording that cannot tell
-them: too short, too slow, or not turning about enough axes.
+them: too short, too slow, or not turning about enough axes. The result is a
+:class:`~ftcomp.calibration_record.DynamicCalibration` (:mod:`ftcomp.io.dynamic_json` writes it).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ftcomp.calibration.identify import Calibration
+from ftcomp.calibration_record import Calibration, DynamicCalibration
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import IdentificationError
 from ftcomp.kinematics import (
@@ -29,7 +29,7 @@ from ftcomp.kinematics import (
 )
 from ftcomp.model import GravityModel, skew
 
-__all__ = ["DynamicCalibration", "ExcitationLimits", "identify_inertia"]
+__all__ = ["ExcitationLimits", "identify_inertia"]
 
 
 @dataclass(frozen=True)
@@ -46,48 +46,6 @@ class ExcitationLimits:
     min_duration_s: float = 1.0
     min_alpha_rad_s2: float = 5.0
     max_relative_std: float = 0.1
-
-
-@dataclass(frozen=True)
-class DynamicCalibration:
-    """The tool's inertia, identified (the static parameters come from ``static``).
-
-    Attributes:
-        inertia_cog_kgm2: inertia tensor about the centre of gravity, sensor axes, (3, 3).
-        std_error_kgm2: standard errors of ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``, (6,).
-        residual_rms_Nm: RMS torque residual per axis after the fit, (3,).
-        samples: readings used.
-        duration_s: recorded time [s].
-        peak_alpha_rad_s2: peak |angular acceleration| about each sensor axis, (3,).
-        peak_omega_rad_s: peak |angular velocity| about each sensor axis, (3,).
-        peak_accel_mps2: peak |linear acceleration| of the sensor origin [m/s^2].
-    """
-
-    inertia_cog_kgm2: NDArray[np.float64] = field(repr=False)
-    std_error_kgm2: NDArray[np.float64] = field(repr=False)
-    residual_rms_Nm: NDArray[np.float64] = field(repr=False)
-    samples: int
-    duration_s: float
-    peak_alpha_rad_s2: NDArray[np.float64] = field(repr=False)
-    peak_omega_rad_s: NDArray[np.float64] = field(repr=False)
-    peak_accel_mps2: float
-
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready document (SI units, names with units)."""
-        theta = self.inertia_cog_kgm2[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
-        return {
-            "format": "ftcomp-dynamic-calibration/1",
-            "inertia_cog_kgm2": dict(zip(INERTIA_PARAMETERS, theta.tolist(), strict=True)),
-            "std_error_kgm2": dict(
-                zip(INERTIA_PARAMETERS, self.std_error_kgm2.tolist(), strict=True)
-            ),
-            "residual_rms_Nm": self.residual_rms_Nm.tolist(),
-            "samples": self.samples,
-            "duration_s": self.duration_s,
-            "peak_alpha_rad_s2": self.peak_alpha_rad_s2.tolist(),
-            "peak_omega_rad_s": self.peak_omega_rad_s.tolist(),
-            "peak_accel_mps2": self.peak_accel_mps2,
-        }
 
 
 def _inertia_regressor(v: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -1,5 +1,8 @@
 """The joint fit extended: a bias that drifts with time and an unknown sensor mount rotation.
 
+The fit itself; :func:`ftcomp.calibration.identify_extended.calibrate_extended` turns its
+parameters into a calibration (with :mod:`.drift` and :mod:`.mount`).
+
 One weighted nonlinear least-squares fit over the per-pose means, as
 :func:`ftcomp.calibration.methods.fit_joint`, with optional extra parameters::
 
@@ -15,25 +18,14 @@ method's (analytic) for theta, analytic for c, central differences for phi.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from ftcomp.calibration.methods import joint_jacobian, predict_wrench
+from ftcomp.calibration_record import MountAxes, mount_matrix
 
-__all__ = ["ExtendedFit", "MountAxes", "fit_extended", "mount_matrix", "predict_extended"]
-
-MountAxes = Literal["yaw", "full"]
-
-
-def mount_matrix(phi: NDArray[np.float64], axes: MountAxes | None) -> NDArray[np.float64]:
-    """``R_rec_sensor`` for the mount parameters: yaw ``(psi,)`` or a rotation vector (3,)."""
-    if axes is None:
-        return np.eye(3)
-    rotvec = np.array([0.0, 0.0, phi[0]]) if axes == "yaw" else np.asarray(phi, dtype=float)
-    return np.asarray(Rotation.from_rotvec(rotvec).as_matrix(), dtype=float)
+__all__ = ["ExtendedFit", "fit_extended", "predict_extended"]
 
 
 @dataclass(frozen=True)

@@ -4,40 +4,37 @@
 the poses can separate bias from gravity, fits with the chosen method
 (:mod:`ftcomp.calibration.methods`) and reports what a user needs to trust the result: the standard
 error of every parameter, the regressor's condition number, per-pose residuals, the paper's
-Table-3 relative errors and the leave-one-pose-out prediction error.
+Table-3 relative errors and the leave-one-pose-out prediction error, as a
+:class:`~ftcomp.calibration_record.Calibration`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ftcomp.arrays import freeze_field
 from ftcomp.calibration.loo import leave_one_out as _leave_one_out
-from ftcomp.calibration.methods import CONDITION_SINGULAR, Method, fit_method, force_regressor
+from ftcomp.calibration.methods import CONDITION_SINGULAR, fit_method, force_regressor
 from ftcomp.calibration.outliers import check_fit, check_readings, outlier_warning
+from ftcomp.calibration_record import Calibration, Method, StandardErrors
 from ftcomp.errors import IdentificationError, ParameterError
 from ftcomp.frames import tilt_from_gravity_in_base
 from ftcomp.model import GravityModel
 from ftcomp.samples import Samples
 
-if TYPE_CHECKING:  # only annotations: drift and mount build on this module
-    from ftcomp.calibration.drift import BiasDrift
-    from ftcomp.calibration.mount import MountRotation
-
 __all__ = [
     "CONDITION_WARNING",
-    "Calibration",
-    "StandardErrors",
     "calibrate",
     "deviations_in_standard_errors",
     "max_deviations_in_standard_errors",
+    "model_from_theta",
+    "pose_groups",
     "pose_means",
+    "relative_error_percent",
+    "standard_errors_from_fit",
 ]
 
 #: Condition number of the force regressor above which the poses are reported as too alike.
@@ -50,106 +47,15 @@ _CONTINUOUS_STEP = 0.01
 _CONTINUOUS_MIN_ROWS = 20
 
 
-@dataclass(frozen=True)
-class StandardErrors:
-    """One standard error per identified quantity, in the quantity's own unit and frame."""
+def pose_groups(samples: Samples) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Which pose each reading belongs to, as :func:`pose_means` groups them.
 
-    weight_N: float
-    center_of_gravity_m: NDArray[np.float64]
-    force_bias_N: NDArray[np.float64]
-    torque_bias_Nm: NDArray[np.float64]
-    tilt_U_rad: float
-    tilt_V_rad: float
-    gravity_base_N: NDArray[np.float64]
-
-    def __post_init__(self) -> None:
-        for name in ("center_of_gravity_m", "force_bias_N", "torque_bias_Nm", "gravity_base_N"):
-            freeze_field(self, name, (3,))
-
-
-@dataclass(frozen=True)
-class Calibration:
-    """The result of an identification: the model plus the evidence for it.
-
-    Attributes:
-        model: the identified :class:`~ftcomp.model.GravityModel`.
-        method: ``"paper"`` or ``"joint"``.
-        std_errors: standard error of every parameter.
-        pose_ids: the id of each pose, in the order of the per-pose arrays.
-        R_base_sensor: orientation of each pose, shape (P, 3, 3).
-        wrench_mean: mean reading at each pose [N, N*m], shape (P, 6).
-        readings_per_pose: how many readings were averaged at each pose, shape (P,).
-        residuals: ``wrench_mean - model.predict(R)`` per pose, shape (P, 6).
-        relative_error_percent: the paper's Table 3, ``100 |residual| / |wrench_mean|``, (P, 6).
-        loo_error: leave-one-pose-out prediction error per pose (NaN where the other poses
-            could not identify the model), shape (P, 6).
-        condition_number: of the force regressor (Eq. 7); large means poses too alike.
-        warnings: human-readable warnings.
-        bias_drift: the bias as a function of time (``--bias-drift``), or None: constant.
-        mount: the sensor frame's rotation in the frame the orientations were recorded in
-            (``--identify-mount``), or None: the orientations are the sensor's.
+    Returns:
+        ``(group (N,), first (P,))``: each row's pose number (0, 1, ... in order of first
+        appearance) and each pose's first row; poses by ``pose`` id, or without one by
+        orientation (rounded to 1e-9). Use it to average any per-row quantity per pose, e.g.
+        the times: ``np.bincount(group, samples.t) / np.bincount(group)``.
     """
-
-    model: GravityModel
-    method: Method
-    std_errors: StandardErrors
-    pose_ids: tuple[str, ...]
-    R_base_sensor: NDArray[np.float64] = field(repr=False)
-    wrench_mean: NDArray[np.float64] = field(repr=False)
-    readings_per_pose: NDArray[np.float64] = field(repr=False)
-    residuals: NDArray[np.float64] = field(repr=False)
-    relative_error_percent: NDArray[np.float64] = field(repr=False)
-    loo_error: NDArray[np.float64] = field(repr=False)
-    condition_number: float = math.inf
-    warnings: tuple[str, ...] = ()
-    bias_drift: BiasDrift | None = None
-    mount: MountRotation | None = None
-
-    def __post_init__(self) -> None:
-        n = len(self.pose_ids)
-        for name, shape in (
-            ("R_base_sensor", (n, 3, 3)),
-            ("wrench_mean", (n, 6)),
-            ("readings_per_pose", (n,)),
-            ("residuals", (n, 6)),
-            ("relative_error_percent", (n, 6)),
-            ("loo_error", (n, 6)),
-        ):
-            freeze_field(self, name, shape)
-
-    @property
-    def residual_rms(self) -> tuple[float, float]:
-        """RMS of the force [N] and torque [N*m] residuals over poses and axes."""
-        r = self.residuals
-        if not len(r):
-            return math.nan, math.nan
-        return float(np.sqrt(np.mean(r[:, :3] ** 2))), float(np.sqrt(np.mean(r[:, 3:] ** 2)))
-
-    @property
-    def relative_error_mean_percent(self) -> NDArray[np.float64]:
-        """Mean of the Table-3 relative errors per axis, shape (6,) (the paper's delta row)."""
-        relative = self.relative_error_percent
-        seen = np.isfinite(relative).any(axis=0)  # an axis without any: NaN, and no warning
-        out = np.full(6, np.nan)
-        out[seen] = np.nanmean(relative[:, seen], axis=0)
-        return out
-
-    @property
-    def loo_rms(self) -> tuple[float, float]:
-        """RMS leave-one-pose-out prediction error: force [N], torque [N*m]."""
-        e = self.loo_error
-        if not np.any(np.isfinite(e)):
-            return math.nan, math.nan
-        with np.errstate(invalid="ignore"):
-            return (
-                float(np.sqrt(np.nanmean(e[:, :3] ** 2))),
-                float(np.sqrt(np.nanmean(e[:, 3:] ** 2))),
-            )
-
-
-def _groups(samples: Samples) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
-    """Each row's pose number (0, 1, ... in order of first appearance) and each pose's first
-    row: by ``pose`` id, or without one by orientation (rounded to 1e-9)."""
     if samples.pose is not None:
         _, first, inverse = np.unique(samples.pose, return_index=True, return_inverse=True)
     else:
@@ -189,7 +95,7 @@ def pose_means(
     error pointing to still-segment detection). Returns ``(ids, R (P,3,3), wrench mean (P,6),
     counts (P,), variance of the mean (P,6))``, the variance NaN at poses with a single reading.
     """
-    group, first = _groups(samples)
+    group, first = pose_groups(samples)
     _check_not_continuous(samples, len(first))
     n_poses = len(first)
     R_all, w = samples.R_base_sensor, samples.wrench_sensor
@@ -275,10 +181,19 @@ def _propagate(
     return np.sqrt(np.maximum(np.diag(J @ cov @ J.T), 0.0))
 
 
-def _standard_errors(theta: NDArray[np.float64], cov: NDArray[np.float64]) -> StandardErrors:
-    """Standard errors of the model's quantities from the fit's first 12 parameters
-    ``[gravity_base (3), F0 (3), M0 (3), P (3)]`` and their covariance (weight and tilt by
-    first-order propagation); any further parameters (drift, mount) are ignored here."""
+def standard_errors_from_fit(
+    theta: NDArray[np.float64], cov: NDArray[np.float64]
+) -> StandardErrors:
+    """The standard errors of the model's quantities from a fit's parameters and covariance.
+
+    Args:
+        theta: the fit's parameters, the first 12 ``[gravity_base (3), F0 (3), M0 (3), P (3)]``
+            (:mod:`ftcomp.calibration.methods`); any further ones (drift, mount) are ignored.
+        cov: their covariance, at least (12, 12).
+
+    Weight and tilt by first-order propagation through
+    :func:`~ftcomp.frames.tilt_from_gravity_in_base`.
+    """
     theta, cov = theta[:12], cov[:12, :12]
     gvu = _propagate(lambda th: np.array(tilt_from_gravity_in_base(th[0:3])), theta, cov)
     se = np.sqrt(np.maximum(np.diag(cov), 0.0))
@@ -293,8 +208,21 @@ def _standard_errors(theta: NDArray[np.float64], cov: NDArray[np.float64]) -> St
     )
 
 
-def _model(theta: NDArray[np.float64]) -> GravityModel:
+def model_from_theta(theta: NDArray[np.float64]) -> GravityModel:
+    """The model of a fit's first 12 parameters ``[gravity_base, F0, M0, P]``
+    (:mod:`ftcomp.calibration.methods`), any further ones (drift, mount) ignored."""
     return GravityModel.from_gravity_in_base(theta[0:3], theta[9:12], theta[3:6], theta[6:9])
+
+
+def relative_error_percent(
+    residuals: NDArray[np.float64], wrench_mean: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The paper's Table 3: ``100 |residual| / |wrench_mean|`` per pose and axis, (P, 6); NaN
+    where the mean reading is 0 (no relative error can be measured)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        relative = 100.0 * np.abs(residuals) / np.abs(wrench_mean)
+    relative[~np.isfinite(relative)] = np.nan
+    return relative
 
 
 def calibrate(
@@ -323,12 +251,10 @@ def calibrate(
     cond = _check_identifiable(R, samples.source)
     fit, sigma = fit_method(method, wrench, R, var_mean, count)
     check_fit(fit.theta, fit.covariance, samples.source)
-    model = _model(fit.theta)
-    std_errors = _standard_errors(fit.theta, fit.covariance)
+    model = model_from_theta(fit.theta)
+    std_errors = standard_errors_from_fit(fit.theta, fit.covariance)
     residuals = wrench - model.predict(R)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        relative = 100.0 * np.abs(residuals) / np.abs(wrench)
-    relative[~np.isfinite(relative)] = np.nan
+    relative = relative_error_percent(residuals, wrench)
 
     loo = np.full_like(wrench, np.nan)
     if leave_one_out:

@@ -9,17 +9,16 @@ from ``a`` (Eq. 10-11); see :mod:`ftcomp.calibration` for the derived quantities
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp.calibration_record import Method
 from ftcomp.model import skew
 
 __all__ = [
     "CONDITION_SINGULAR",
     "Fit",
-    "Method",
     "fit_joint",
     "fit_method",
     "fit_paper",
@@ -31,8 +30,6 @@ __all__ = [
     "skew_stack",
     "torque_regressor",
 ]
-
-Method = Literal["paper", "joint"]
 
 #: Condition number of the force regressor above which bias and gravity are not separable.
 CONDITION_SINGULAR = 1e7

@@ -1,7 +1,8 @@
 """Readings and fits no sensor could produce, and poses whose readings disagree with the rest.
 
-**Plausibility.** No force/torque sensor reads beyond :data:`PLAUSIBLE_FORCE_N` (1e6 N, a
-hundred tonnes) or :data:`PLAUSIBLE_TORQUE_NM` (1e5 N*m); the largest six-axis sensors made
+**Plausibility.** No force/torque sensor reads beyond
+:data:`~ftcomp.constants.PLAUSIBLE_FORCE_N` (1e6 N, a hundred tonnes) or
+:data:`~ftcomp.constants.PLAUSIBLE_TORQUE_NM` (1e5 N*m); the largest six-axis sensors made
 stop near 1e5 N and 1e4 N*m. A reading beyond them is a corrupt cell or a unit mistake, and
 letting it into a least-squares fit gives a meaningless result (readings near 1e155 overflow
 the squares). The sample readers reject such readings (naming row and column), and
@@ -28,12 +29,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.calibration.methods import force_regressor, torque_regressor
+from ftcomp.constants import PLAUSIBLE_FORCE_N, PLAUSIBLE_TORQUE_NM
 from ftcomp.errors import IdentificationError
 
 __all__ = [
     "OUTLIER_THRESHOLD",
-    "PLAUSIBLE_FORCE_N",
-    "PLAUSIBLE_TORQUE_NM",
     "check_fit",
     "check_readings",
     "outlier_threshold",
@@ -41,10 +41,6 @@ __all__ = [
     "studentized_pose_residuals",
 ]
 
-#: A force reading beyond +-this [N] is not from any F/T sensor.
-PLAUSIBLE_FORCE_N = 1e6
-#: A torque reading beyond +-this [N*m] is not from any F/T sensor.
-PLAUSIBLE_TORQUE_NM = 1e5
 #: Externally studentised residual [standard deviations] beyond which a pose is an outlier,
 #: at least: with few poses the threshold rises so that clean Gaussian readings are flagged in
 #: fewer than one calibration in a thousand (Bonferroni over every pose and column, the

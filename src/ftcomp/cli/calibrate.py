@@ -11,7 +11,8 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from ftcomp.calibration.identify import Calibration, calibrate
+from ftcomp.calibration.identify import calibrate
+from ftcomp.calibration_record import Calibration
 from ftcomp.cli.common import add_range_argument, print_warnings
 from ftcomp.errors import ParameterError
 from ftcomp.io.atomic import check_writable
@@ -91,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     if extended and args.method != "joint":
         raise ParameterError("--bias-drift and --identify-mount need --method joint")
     if extended:
-        from ftcomp.calibration.drift import calibrate_extended
+        from ftcomp.calibration.identify_extended import calibrate_extended
 
         result = calibrate_extended(
             samples, bias_drift=args.bias_drift, identify_mount=args.identify_mount

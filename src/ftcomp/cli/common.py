@@ -6,6 +6,10 @@ import argparse
 import math
 import sys
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ftcomp.calibration_record import Calibration
 
 __all__ = ["add_range_argument", "parse_range", "print_warnings", "warn_live_drift"]
 
@@ -41,9 +45,9 @@ def add_range_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def warn_live_drift(calibration: object, path: str) -> None:
+def warn_live_drift(calibration: Calibration, path: str) -> None:
     """Say so when a calibration's bias drift will not be applied by a live loop."""
-    if getattr(calibration, "bias_drift", None) is not None:
+    if calibration.bias_drift is not None:
         print_warnings(
             [
                 f"{path}: the bias drift model is not applied live (its times are the "

@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from ftcomp.calibration.drift import rebias
+from ftcomp.calibration.rebias import rebias
 from ftcomp.cli.common import print_warnings
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.calibration_json import load_calibration, save_calibration

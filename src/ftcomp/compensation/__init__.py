@@ -1,3 +1,13 @@
-"""Gravity compensation at run time (:mod:`.compensator`) and weighing a grasped load
-(:mod:`.load`).
+"""Gravity compensation: remove what a calibration says the tool and the sensor add.
+
+- :mod:`.compensator`: :class:`~.compensator.GravityCompensator`, bias and tool gravity removed
+  at run time (paper Eq. 20-22), with the calibration's mount and bias drift.
+- :mod:`.load`: weighing a grasped load from compensated readings.
+- :mod:`.online`: a grasped load estimated online (grasp and release detected) and removed too.
+- :mod:`.inertial`: the moving tool's inertial wrench removed as well.
+
+The package imports none of its modules (``__all__`` names them), so a command loads only the
+ones it uses.
 """
+
+__all__ = ["compensator", "inertial", "load", "online"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ftcomp.calibration.identify import Calibration
+from ftcomp.calibration_record import BiasDrift, Calibration, MountRotation
 from ftcomp.errors import ParameterError
 from ftcomp.model import GravityModel, skew
 
@@ -22,7 +22,7 @@ class GravityCompensator:
     """Removes bias and tool gravity from F/T readings.
 
     Args:
-        calibration: a :class:`~ftcomp.calibration.Calibration` (e.g. from
+        calibration: a :class:`~ftcomp.calibration_record.Calibration` (e.g. from
             :func:`ftcomp.load_calibration`) or a bare :class:`~ftcomp.model.GravityModel`.
 
     A calibration with a mount (``--identify-mount``) takes the orientations of the frame it
@@ -32,18 +32,22 @@ class GravityCompensator:
     """
 
     def __init__(self, calibration: Calibration | GravityModel) -> None:
-        model = calibration.model if isinstance(calibration, Calibration) else calibration
+        if isinstance(calibration, Calibration):
+            model, mount, drift = calibration.model, calibration.mount, calibration.bias_drift
+        else:
+            model, mount, drift = calibration, None, None
         self.model = model
-        mount = calibration.mount if isinstance(calibration, Calibration) else None
+        #: The calibration's mount (None: the orientations given are the sensor's).
+        self.mount: MountRotation | None = mount
         #: The calibration's bias drift (None: constant bias).
-        self.bias_drift = calibration.bias_drift if isinstance(calibration, Calibration) else None
+        self.bias_drift: BiasDrift | None = drift
         self._gravity_base = model.gravity_base_N.copy()
         self._bias = np.concatenate([model.force_bias_N, model.torque_bias_Nm])
         # [F; M] of the tool gravity = A @ g_s with A = [I; skew(P)] (Eq. 12, 20); with a mount,
         # g_s = R_rec_sensor.T @ g_rec, so A @ R_rec_sensor.T acts on the recorded frame's.
         self._A = np.vstack([np.eye(3), skew(model.center_of_gravity_m)])
-        if mount is not None:
-            self._A = self._A @ mount.R_rec_sensor.T
+        if self.mount is not None:
+            self._A = self._A @ self.mount.R_rec_sensor.T
         # For a batch, fold R.T @ g and A into one (9, 6) matrix acting on R flattened row-major:
         # g_s[j] = sum_i g[i] R[i, j], so R.reshape(N, 9) @ K gives every g_s, K[3i+j, j] = g[i].
         K = np.zeros((9, 3))

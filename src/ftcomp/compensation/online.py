@@ -36,7 +36,7 @@ from enum import Enum
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ftcomp.calibration.identify import Calibration
+from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
@@ -210,8 +210,7 @@ class OnlineLoadCompensator(GravityCompensator):
         self.settings = s = settings if settings is not None else OnlineSettings()
         self._u = np.asarray(self.gravity_dir_base, dtype=float)
         # With a mount the orientations given are the recorded frame's: R_base_sensor = R @ this.
-        mount = getattr(calibration, "mount", None)
-        self._R_rec_sensor = None if mount is None else np.asarray(mount.R_rec_sensor)
+        self._R_rec_sensor = None if self.mount is None else self.mount.R_rec_sensor
         weights = np.array([1 / s.force_noise_std_N**2] * 3 + [1 / s.torque_noise_std_Nm**2] * 3)
         self.rls = LoadRls(
             STANDARD_GRAVITY_MPS2, weights, math.exp(-1.0 / (s.memory_s * s.rate_Hz))

@@ -17,7 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp import paper
-from ftcomp.calibration.identify import Calibration, calibrate
+from ftcomp.calibration.identify import calibrate
+from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.online import OnlineLoadCompensator
 from ftcomp.experiments.gravity import collect_paper_poses
 from ftcomp.sim.cell import HOME_Q_RAD, SimCell

@@ -22,8 +22,9 @@ from numpy.typing import NDArray
 from scipy.signal import savgol_filter
 
 from ftcomp import paper
-from ftcomp.calibration.dynamic import DynamicCalibration, identify_inertia
+from ftcomp.calibration.dynamic import identify_inertia
 from ftcomp.calibration.identify import calibrate
+from ftcomp.calibration_record import DynamicCalibration
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.compensation.inertial import InertialCompensator
 from ftcomp.experiments.gravity import collect_paper_poses

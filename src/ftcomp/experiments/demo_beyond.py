@@ -18,7 +18,7 @@ import numpy as np
 
 from ftcomp.experiments.beyond import run_grasp_during_move, run_motion_without_grasp
 from ftcomp.experiments.beyond_inertial import EVALUATION_FILTER, FastMoveRun, run_fast_move
-from ftcomp.io.samples_csv import write_table
+from ftcomp.io.tables import write_table
 from ftcomp.report.figures import plot_fast_move, plot_online_load
 from ftcomp.report.html import Figure, Mark, Section, Table
 

@@ -13,15 +13,13 @@ from typing import TYPE_CHECKING, Any
 from scipy.spatial.transform import Rotation
 
 from ftcomp import paper
-from ftcomp.calibration.identify import (
-    Calibration,
-    calibrate,
-    max_deviations_in_standard_errors,
-)
+from ftcomp.calibration.identify import calibrate, max_deviations_in_standard_errors
+from ftcomp.calibration_record import Calibration
 from ftcomp.experiments import gravity
 from ftcomp.io.atomic import atomic_write_text
 from ftcomp.io.calibration_json import calibration_to_dict, model_to_dict, save_calibration
 from ftcomp.io.samples_csv import write_samples
+from ftcomp.io.truth_json import truth_document
 from ftcomp.model import GravityModel
 from ftcomp.report.html import Section, Table
 from ftcomp.samples import WRENCH_COLUMNS
@@ -29,7 +27,7 @@ from ftcomp.samples import WRENCH_COLUMNS
 if TYPE_CHECKING:
     from ftcomp.experiments.demo import DemoSettings
 
-__all__ = ["TRUTH_HEADER", "calibration_section", "truth_document"]
+__all__ = ["calibration_section"]
 
 Advance = Callable[[str], None]
 
@@ -122,27 +120,6 @@ def calibration_section(
     )
     return metrics, section, joint, paper_data
 
-
-def truth_document(truth: GravityModel) -> dict[str, Any]:
-    """The simulated cell's true parameters under the calibration-file keys, said to be so.
-
-    Not a calibration file (format ``ftcomp.truth/1``, method ``truth``: nothing was
-    identified); :func:`ftcomp.io.calibration_json.model_from_dict` reads it as a
-    :class:`GravityModel`.
-    """
-    return {**TRUTH_HEADER, **model_to_dict(truth)}
-
-
-#: What a truth file is (``ftcomp sim collect --truth``, the demo's ``truth.json``): its own
-#: format tag, so ``load_calibration`` refuses it by name, and ``method`` saying nothing was
-#: identified, so ``model_from_dict`` reads its parameters.
-TRUTH_HEADER = {
-    "format": "ftcomp.truth/1",
-    "method": "truth",
-    "description": "The simulated cell's true parameters (what it was built with), under the "
-    "calibration-file keys; not a calibration file: read it with "
-    "ftcomp.io.calibration_json.model_from_dict",
-}
 
 #: (label, unit, scale to the unit, getter) per table row; the getter reads a GravityModel or
 #: the same attribute of its StandardErrors.

@@ -12,11 +12,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ftcomp import paper
-from ftcomp.calibration.identify import (
-    Calibration,
-)
+from ftcomp.calibration_record import Calibration
 from ftcomp.experiments import gravity
-from ftcomp.io.samples_csv import write_table
+from ftcomp.io.tables import write_table
 from ftcomp.report.figures import plot_continuous_pose, plot_table3, plot_table4
 from ftcomp.report.html import Figure, Section, Table
 from ftcomp.samples import WRENCH_COLUMNS

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ftcomp import paper
-from ftcomp.calibration.identify import Calibration
+from ftcomp.calibration_record import Calibration
 from ftcomp.io.calibration_json import model_to_dict
 from ftcomp.report.figures import plot_placement
 from ftcomp.report.html import Cell, Figure, Link, Mark, Section, Table

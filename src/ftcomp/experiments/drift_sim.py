@@ -42,8 +42,10 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.calibration.design import candidate_orientations, design_poses, nominal_theta
-from ftcomp.calibration.drift import DriftModel, calibrate_extended, rebias
-from ftcomp.calibration.identify import Calibration, pose_means
+from ftcomp.calibration.identify import pose_means
+from ftcomp.calibration.identify_extended import calibrate_extended
+from ftcomp.calibration.rebias import rebias
+from ftcomp.calibration_record import Calibration, DriftModel
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.hardware.registry import open_robot, open_sensor

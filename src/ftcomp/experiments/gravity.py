@@ -19,8 +19,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.identify import Calibration, calibrate, pose_means
-from ftcomp.calibration.methods import Method
+from ftcomp.calibration.identify import calibrate, pose_means
+from ftcomp.calibration_record import Calibration, Method
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.compensation.load import estimate_load, load_weight_N
 from ftcomp.frames import encode_orientation, rotation_from_encoding

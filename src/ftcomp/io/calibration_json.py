@@ -17,20 +17,23 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.identify import Calibration, StandardErrors
+from ftcomp.calibration_record import (
+    DRIFT_ORDERS,
+    BiasDrift,
+    Calibration,
+    MountRotation,
+    StandardErrors,
+    mount_matrix,
+)
 from ftcomp.errors import CalibrationFileError
 from ftcomp.io.atomic import atomic_write_text
 from ftcomp.model import GravityModel
-
-if TYPE_CHECKING:
-    from ftcomp.calibration.drift import BiasDrift
-    from ftcomp.calibration.mount import MountRotation
 
 __all__ = [
     "FORMAT",
@@ -115,8 +118,32 @@ def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
             },
         },
         "warnings": list(calibration.warnings),
-        **({"bias_drift": calibration.bias_drift.to_dict()} if calibration.bias_drift else {}),
-        **({"mount": calibration.mount.to_dict()} if calibration.mount else {}),
+        **(
+            {"bias_drift": _drift_to_dict(calibration.bias_drift)} if calibration.bias_drift else {}
+        ),
+        **({"mount": _mount_to_dict(calibration.mount)} if calibration.mount else {}),
+    }
+
+
+def _drift_to_dict(drift: BiasDrift) -> dict[str, object]:
+    return {
+        "model": drift.name,
+        "t_ref_s": drift.t_ref_s,
+        "t_range_s": [drift.t_min_s, drift.t_max_s],
+        "columns": ["fx", "fy", "fz", "tx", "ty", "tz"],
+        "coefficients_per_s_power": drift.coefficients.tolist(),
+        "std_errors": [[v if math.isfinite(v) else None for v in r] for r in drift.std_errors],
+    }
+
+
+def _mount_to_dict(mount: MountRotation) -> dict[str, object]:
+    """Degrees at the edge."""
+    return {
+        "axes": mount.axes,
+        "angles_deg": np.degrees(mount.angles_rad).tolist(),
+        "std_errors_deg": [
+            math.degrees(v) if math.isfinite(v) else None for v in mount.std_errors_rad
+        ],
     }
 
 
@@ -352,8 +379,6 @@ def load_calibration(path: str | os.PathLike[str]) -> Calibration:
 
 def _drift(data: Any, source: str) -> BiasDrift | None:
     """The optional ``bias_drift`` entry (absent or null: a constant bias)."""
-    from ftcomp.calibration.drift import DRIFT_ORDERS, BiasDrift
-
     if data is None:
         return None
     order = DRIFT_ORDERS.get(str(data.get("model"))) if isinstance(data, dict) else None
@@ -381,6 +406,26 @@ def _drift(data: Any, source: str) -> BiasDrift | None:
 
 def _mount(data: Any, source: str) -> MountRotation | None:
     """The optional ``mount`` entry (absent or null: the orientations are the sensor's)."""
-    from ftcomp.calibration.mount import MountRotation
-
-    return None if data is None else MountRotation.from_dict(data, source)
+    if data is None:
+        return None
+    if not isinstance(data, dict) or data.get("axes") not in ("yaw", "full"):
+        raise CalibrationFileError(f"{source}: 'mount' must be {{axes: yaw|full, angles_deg}}")
+    axes = data["axes"]
+    n = 1 if axes == "yaw" else 3
+    angles = data.get("angles_deg")
+    try:
+        values = np.array(angles, dtype=float)
+    except (TypeError, ValueError):
+        values = np.array([])
+    if values.shape != (n,) or not np.all(np.isfinite(values)):
+        raise CalibrationFileError(
+            f"{source}: 'mount.angles_deg' must be {n} finite number(s), got {angles!r}"
+        )
+    se = data.get("std_errors_deg")
+    se_values = np.array(
+        [float(v) if isinstance(v, (int, float)) else math.nan for v in se]
+        if isinstance(se, list) and len(se) == n
+        else [math.nan] * n
+    )
+    phi = np.radians(values)
+    return MountRotation(axes, mount_matrix(phi, axes), phi, np.radians(se_values))

@@ -2,7 +2,7 @@
 
 Format ``ftcomp-dynamic-calibration/1``: ``inertia_cog_kgm2`` (``Ixx, Iyy, Izz, Ixy, Ixz, Iyz``
 [kg m^2], about the centre of gravity, sensor axes), their standard errors and the recording's
-statistics (:meth:`ftcomp.calibration.dynamic.DynamicCalibration.to_dict`).
+statistics (:func:`dynamic_to_dict`).
 """
 
 from __future__ import annotations
@@ -10,16 +10,37 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ftcomp.calibration.dynamic import DynamicCalibration
+from ftcomp.calibration_record import DynamicCalibration
 from ftcomp.errors import CalibrationFileError
 from ftcomp.io.atomic import atomic_write_text, check_writable
 from ftcomp.kinematics import INERTIA_PARAMETERS, inertia_from_parameters
 
-__all__ = ["load_dynamic", "save_dynamic"]
+__all__ = ["FORMAT", "dynamic_to_dict", "load_dynamic", "save_dynamic"]
+
+FORMAT = "ftcomp-dynamic-calibration/1"
+
+
+def dynamic_to_dict(dynamic: DynamicCalibration) -> dict[str, Any]:
+    """A dynamic calibration as a JSON-ready document (SI units, names with units)."""
+    theta = dynamic.inertia_cog_kgm2[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
+    return {
+        "format": FORMAT,
+        "inertia_cog_kgm2": dict(zip(INERTIA_PARAMETERS, theta.tolist(), strict=True)),
+        "std_error_kgm2": dict(
+            zip(INERTIA_PARAMETERS, dynamic.std_error_kgm2.tolist(), strict=True)
+        ),
+        "residual_rms_Nm": dynamic.residual_rms_Nm.tolist(),
+        "samples": dynamic.samples,
+        "duration_s": dynamic.duration_s,
+        "peak_alpha_rad_s2": dynamic.peak_alpha_rad_s2.tolist(),
+        "peak_omega_rad_s": dynamic.peak_omega_rad_s.tolist(),
+        "peak_accel_mps2": dynamic.peak_accel_mps2,
+    }
 
 
 def save_dynamic(
@@ -27,7 +48,7 @@ def save_dynamic(
 ) -> None:
     """Write ``dynamic`` as JSON; an existing file needs ``overwrite`` (``--force``)."""
     out = check_writable(path, overwrite=overwrite)
-    atomic_write_text(out, json.dumps(dynamic.to_dict(), indent=2) + "\n")
+    atomic_write_text(out, json.dumps(dynamic_to_dict(dynamic), indent=2) + "\n")
 
 
 def load_dynamic(path: str | os.PathLike[str]) -> NDArray[np.float64]:

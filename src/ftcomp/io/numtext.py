@@ -15,12 +15,10 @@ kept (``-0.0`` is written as `` 0.000000000e+00``).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["FIELD_WIDTH", "format_row", "format_rows", "format_time"]
+__all__ = ["FIELD_WIDTH", "format_rows"]
 
 #: Bytes per value: the separator ``,`` and 16 characters of ``% .9e``.
 FIELD_WIDTH = 17
@@ -132,15 +130,3 @@ def format_rows(values: ArrayLike) -> tuple[NDArray[np.uint8], NDArray[np.int64]
     lengths = np.fromiter((len(r) for r in rows), dtype=np.int64, count=n)
     offsets = np.concatenate([np.zeros(1, dtype=np.int64), np.cumsum(lengths)])
     return np.frombuffer(b"".join(rows), dtype=np.uint8), offsets
-
-
-def format_time(t_s: float) -> str:
-    """A time stamp [s] as text to the nanosecond: fixed-point, because ten significant digits
-    of a clock that has run for hours (or of a Unix time) would drop the milliseconds."""
-    return f"{t_s:.9f}"
-
-
-def format_row(row: Sequence[float]) -> list[str]:
-    """One log row as text, its first value a time stamp [s]: the time to the nanosecond
-    (:func:`format_time`), every other value to ten significant digits (``%.10g``)."""
-    return [format_time(row[0]), *(f"{v:.10g}" for v in row[1:])]

@@ -15,15 +15,13 @@ accepts more (``3_3445`` as 33445, ``١٢``, ``infinity``); those are errors her
 ``inf`` are read only to be rejected as not finite.
 
 **Limits.** A force beyond 1e6 N or a torque beyond 1e5 N*m is no sensor's reading (an error
-without a sensor range too; :mod:`ftcomp.calibration.outliers`). Lines are bounded
+without a sensor range too; :mod:`ftcomp.constants`). Lines are bounded
 (:mod:`ftcomp.io.chunks`); the header must be the first line (a blank first line is an error).
 """
 
 from __future__ import annotations
 
-import csv
 import difflib
-import io
 import math
 import re
 import sys
@@ -36,23 +34,21 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.outliers import PLAUSIBLE_FORCE_N, PLAUSIBLE_TORQUE_NM
+from ftcomp.constants import PLAUSIBLE_FORCE_N, PLAUSIBLE_TORQUE_NM
 from ftcomp.errors import InputFileError
 from ftcomp.frames import ENCODING_COLUMNS, OrientationEncoding
-from ftcomp.io.chunks import csv_rows
 from ftcomp.samples import WRENCH_COLUMNS
 
 __all__ = [
     "MAX_ORIENTATION_VALUE",
     "OrientationCheck",
-    "ParsedRows",
     "SampleBlock",
     "SampleLayout",
     "check_header",
+    "check_row_limits",
     "check_values",
     "first_bad_value",
     "parse_number",
-    "parse_rows",
 ]
 
 _OTHER_DELIMITERS = (";", "\t", "|")
@@ -204,7 +200,14 @@ def _limits(layout: SampleLayout) -> list[tuple[float, str, str]]:
     return out[: len(layout.numeric) - layout.has_t] + [(sys.float_info.max, "", "")] * layout.has_t
 
 
-def _check_range(values: Sequence[float], layout: SampleLayout, where: str) -> None:
+def check_row_limits(values: Sequence[float], layout: SampleLayout, where: str) -> None:
+    """Raise for the first of one row's numeric ``values`` (in ``layout.numeric`` order)
+    beyond its limit: the sensor range or the plausible bound (wrench), or
+    :data:`MAX_ORIENTATION_VALUE`; ``where`` names the row in the message.
+
+    Raises:
+        InputFileError: ``"<where>, column 'fx': 2e+06 N is beyond ..."``.
+    """
     for name, value, (limit, unit, what) in zip(layout.numeric, values, layout.limits, strict=True):
         if abs(value) > limit:
             raise InputFileError(
@@ -215,7 +218,8 @@ def _check_range(values: Sequence[float], layout: SampleLayout, where: str) -> N
 def check_values(values: NDArray[np.float64], layout: SampleLayout) -> bool:
     """Whether a block of ``values`` (N, len(layout.numeric)) passes every value check at once:
     all finite and within the limits. When it does not, the reader names the first bad cell
-    with :func:`parse_rows` (CSV, with line numbers) or :func:`first_bad_value`."""
+    with :func:`ftcomp.io.samples_csv.parse_rows` (CSV, with line numbers) or
+    :func:`first_bad_value`."""
     return bool((np.abs(values) <= layout.bounds).all())
 
 
@@ -227,79 +231,7 @@ def first_bad_value(values: NDArray[np.float64], layout: SampleLayout, first_row
         for name, value in zip(layout.numeric, values[i].tolist(), strict=True):
             if not math.isfinite(value):
                 raise InputFileError(f"{where}, column {name!r}: {value} is not finite")
-        _check_range(values[i].tolist(), layout, where)
-
-
-@dataclass(frozen=True)
-class ParsedRows:
-    """Rows parsed cell by cell: ``values`` (N, len(layout.numeric)), ``pose`` ids (or None),
-    ``cells`` of every row as read, and ``text``: the rows as CSV lines ending in ``\\n``."""
-
-    values: NDArray[np.float64]
-    pose: list[str] | None
-    cells: list[list[str]]
-    text: bytes
-
-    def table(self, layout: SampleLayout) -> Any:
-        """Every column as a pyarrow table: the numeric ones as float64, the others as text."""
-        import pyarrow as pa
-
-        numeric = {name: j for j, name in enumerate(layout.numeric)}
-        columns = [
-            pa.array(self.values[:, numeric[name]])
-            if name in numeric
-            else pa.array([r[i] for r in self.cells], pa.string())
-            for i, name in enumerate(layout.header)
-        ]
-        return pa.table(columns, names=list(layout.header))
-
-
-def parse_rows(text: str, layout: SampleLayout, *, first_row: int, first_line: int) -> ParsedRows:
-    """Parse CSV data rows one cell at a time, checking every rule; blank rows are skipped.
-
-    Args:
-        text: the rows (after the header).
-        layout: the checked header.
-        first_row: the data-row number of the first row (1 = first after the header).
-        first_line: the physical line number of the text's first line.
-
-    Raises:
-        InputFileError: naming file, row, line and column of the first problem.
-    """
-    source, index = layout.source, layout.index
-    numeric = [index[c] for c in layout.numeric]
-    reader = csv.reader(io.StringIO(text))
-    values: list[list[float]] = []
-    poses: list[str] = []
-    kept: list[list[str]] = []
-    for cells in csv_rows(reader, lambda: f"{source}, row {first_row + len(kept)}", first_line):
-        if not cells or all(not c.strip() for c in cells):
-            continue
-        where = f"{source}, row {first_row + len(kept)} (line {first_line - 1 + reader.line_num})"
-        if len(cells) != len(layout.header):
-            raise InputFileError(
-                f"{where}: {len(cells)} cells but the header has {len(layout.header)} columns"
-            )
-        parsed = [
-            parse_number(cells[i], f"{where}, column {name!r}")
-            for i, name in zip(numeric, layout.numeric, strict=True)
-        ]
-        if layout.has_pose:
-            pose_id = cells[index["pose"]].strip()
-            if not pose_id:
-                raise InputFileError(f"{where}, column 'pose': empty pose id")
-            poses.append(pose_id)
-        _check_range(parsed, layout, where)
-        kept.append(cells)
-        values.append(parsed)
-    out = io.StringIO()
-    csv.writer(out, lineterminator="\n").writerows(kept)
-    return ParsedRows(
-        np.array(values, dtype=float).reshape(-1, len(layout.numeric)),
-        poses if layout.has_pose else None,
-        kept,
-        out.getvalue().encode("utf-8"),
-    )
+        check_row_limits(values[i].tolist(), layout, where)
 
 
 @dataclass(frozen=True)

@@ -2,15 +2,20 @@
 
 Format: a header row and comma-delimited UTF-8 rows with the columns of
 :mod:`ftcomp.io.sample_format` (the wrench, one orientation encoding, optional ``pose`` and
-``t``; any other column is carried along). Every check and every message is in that module.
+``t``; any other column is carried along). The rules and the messages are in that module,
+shared with Parquet; this one reads and writes the CSV form.
 
-Files of any length are read in chunks of whole lines (:mod:`ftcomp.io.chunks`) with bounded
-memory. Each chunk is parsed by pyarrow's multi-threaded CSV parser into numpy arrays and checked
-as a block; only a chunk that fails is parsed again cell by cell
-(:func:`~ftcomp.io.sample_format.parse_rows`) to name the first bad cell: every problem is one
+**Reading.** Files of any length are read in chunks of whole lines (:mod:`ftcomp.io.chunks`)
+with bounded memory. Each chunk is parsed by pyarrow's multi-threaded CSV parser into numpy
+arrays and checked as a block; only a chunk that fails is parsed again cell by cell
+(:func:`parse_rows`) to name the first bad cell: every problem is one
 :class:`~ftcomp.errors.InputFileError` naming the file, the data row (1 = first row after the
 header), the line and the column. :func:`read_samples` returns every row at once;
-:func:`open_samples` streams blocks (and reads ``.parquet`` files, :mod:`ftcomp.io.parquet`).
+:func:`open_samples` streams blocks. Both also read ``.parquet`` sample files
+(:mod:`ftcomp.io.parquet`), chosen by the file name, so a caller need not care which it got.
+
+**Writing.** :func:`write_samples` writes readings atomically, values to ten significant digits
+and time stamps to the nanosecond (:mod:`ftcomp.io.timestamps`).
 """
 
 from __future__ import annotations
@@ -30,7 +35,6 @@ from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, OrientationEncoding, encode_orientation
-from ftcomp.io.atomic import atomic_write_text
 from ftcomp.io.chunks import (
     DEFAULT_CHUNK_BYTES,
     CsvRows,
@@ -42,26 +46,29 @@ from ftcomp.io.chunks import (
     open_text,
     read_first_line,
 )
-from ftcomp.io.numtext import format_time
 from ftcomp.io.sample_format import (
     OrientationCheck,
     SampleBlock,
     SampleLayout,
     check_header,
+    check_row_limits,
     check_values,
-    parse_rows,
+    parse_number,
 )
+from ftcomp.io.tables import write_table
+from ftcomp.io.timestamps import format_time
 from ftcomp.samples import WRENCH_COLUMNS, Samples
 
 if TYPE_CHECKING:
     from ftcomp.io.parquet import ParquetSampleReader
 
 __all__ = [
+    "ParsedRows",
     "SampleCsvReader",
     "open_samples",
+    "parse_rows",
     "read_samples",
     "write_samples",
-    "write_table",
 ]
 
 _ARROW_BLOCK_BYTES = 1 << 20  # pyarrow parses blocks of this size in parallel
@@ -115,6 +122,78 @@ def _fast_parse(
             return None
         pose = np.asarray(ids.to_numpy(), dtype=str)
     return values, pose, table.rename_columns(list(layout.header)) if with_table else None
+
+
+@dataclass(frozen=True)
+class ParsedRows:
+    """Rows parsed cell by cell: ``values`` (N, len(layout.numeric)), ``pose`` ids (or None),
+    ``cells`` of every row as read, and ``text``: the rows as CSV lines ending in ``\\n``."""
+
+    values: NDArray[np.float64]
+    pose: list[str] | None
+    cells: list[list[str]]
+    text: bytes
+
+    def table(self, layout: SampleLayout) -> Any:
+        """Every column as a pyarrow table: the numeric ones as float64, the others as text."""
+        import pyarrow as pa
+
+        numeric = {name: j for j, name in enumerate(layout.numeric)}
+        columns = [
+            pa.array(self.values[:, numeric[name]])
+            if name in numeric
+            else pa.array([r[i] for r in self.cells], pa.string())
+            for i, name in enumerate(layout.header)
+        ]
+        return pa.table(columns, names=list(layout.header))
+
+
+def parse_rows(text: str, layout: SampleLayout, *, first_row: int, first_line: int) -> ParsedRows:
+    """Parse CSV data rows one cell at a time, checking every rule; blank rows are skipped.
+
+    Args:
+        text: the rows (after the header).
+        layout: the checked header.
+        first_row: the data-row number of the first row (1 = first after the header).
+        first_line: the physical line number of the text's first line.
+
+    Raises:
+        InputFileError: naming file, row, line and column of the first problem.
+    """
+    source, index = layout.source, layout.index
+    numeric = [index[c] for c in layout.numeric]
+    reader = csv.reader(io.StringIO(text))
+    values: list[list[float]] = []
+    poses: list[str] = []
+    kept: list[list[str]] = []
+    for cells in csv_rows(reader, lambda: f"{source}, row {first_row + len(kept)}", first_line):
+        if not cells or all(not c.strip() for c in cells):
+            continue
+        where = f"{source}, row {first_row + len(kept)} (line {first_line - 1 + reader.line_num})"
+        if len(cells) != len(layout.header):
+            raise InputFileError(
+                f"{where}: {len(cells)} cells but the header has {len(layout.header)} columns"
+            )
+        parsed = [
+            parse_number(cells[i], f"{where}, column {name!r}")
+            for i, name in zip(numeric, layout.numeric, strict=True)
+        ]
+        if layout.has_pose:
+            pose_id = cells[index["pose"]].strip()
+            if not pose_id:
+                raise InputFileError(f"{where}, column 'pose': empty pose id")
+            poses.append(pose_id)
+        check_row_limits(parsed, layout, where)
+        kept.append(cells)
+        values.append(parsed)
+    out = io.StringIO()
+    csv.writer(out, lineterminator="\n").writerows(kept)
+    return ParsedRows(
+        np.array(values, dtype=float).reshape(-1, len(layout.numeric)),
+        poses if layout.has_pose else None,
+        kept,
+        out.getvalue().encode("utf-8"),
+    )
 
 
 @dataclass(frozen=True)
@@ -345,17 +424,6 @@ def read_samples(
         source=reader.source,
         warnings=warnings,
     )
-
-
-def write_table(
-    path: str | os.PathLike[str], header: Sequence[str], rows: Sequence[Sequence[object]]
-) -> None:
-    """Write a CSV table atomically (temporary file, then rename)."""
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(header)
-    writer.writerows(rows)
-    atomic_write_text(path, buffer.getvalue())
 
 
 def _fmt(value: float) -> str:

@@ -24,7 +24,7 @@ from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, encode_orientation
-from ftcomp.io.samples_csv import write_table
+from ftcomp.io.tables import write_table
 from ftcomp.ros2.bag import open_bag, read_joint_states, read_transforms, read_wrenches
 from ftcomp.ros2.still import Segment, StillConfig, find_still_segments
 from ftcomp.ros2.tf import TransformTree

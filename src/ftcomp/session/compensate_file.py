@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.arrays import freeze_field
-from ftcomp.calibration.identify import Calibration
+from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.errors import ParameterError
 from ftcomp.io.atomic import atomic_output, check_writable

@@ -15,7 +15,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 from ftcomp.io.atomic import atomic_output
-from ftcomp.io.numtext import format_time
+from ftcomp.io.timestamps import format_time
 
 __all__ = ["CsvLog", "csv_log"]
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-from ftcomp.calibration.identify import Calibration
+from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.online import (
     GraspEvent,
     GraspState,

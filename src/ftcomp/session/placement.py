@@ -570,7 +570,7 @@ def write_placement_outputs(
         The paths written, by kind (``"csv"``, ``"metrics"``).
     """
     from ftcomp.io.atomic import atomic_write_text
-    from ftcomp.io.timeseries import write_timeseries_csv
+    from ftcomp.io.tables import write_timeseries_csv
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

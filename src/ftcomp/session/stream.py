@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ftcomp.calibration.identify import Calibration
+from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.loop import ControlCycle, Reading, run_loop
 from ftcomp.errors import FtcompError, ParameterError

@@ -22,7 +22,7 @@ from ftcomp.sim.sensor import SensorSpec
 from ftcomp.sim.tool import LoadSpec
 
 if TYPE_CHECKING:
-    from ftcomp.calibration.identify import Calibration
+    from ftcomp.calibration_record import Calibration
 
 __all__ = ["PLACEMENT_SURFACES", "SimPlacementCell"]
 

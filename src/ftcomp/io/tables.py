@@ -1,4 +1,8 @@
-"""Time series as CSV: named columns of equal length, one row per cycle, written atomically."""
+"""CSV tables written atomically: rows under a header, or named columns of equal length.
+
+:func:`write_table` writes rows as they are given (text or numbers); :func:`write_timeseries_csv`
+writes a time series, one row per cycle, to a number of significant digits.
+"""
 
 from __future__ import annotations
 
@@ -13,7 +17,7 @@ from numpy.typing import NDArray
 from ftcomp.errors import ParameterError
 from ftcomp.io.atomic import atomic_write_text
 
-__all__ = ["write_timeseries_csv"]
+__all__ = ["write_table", "write_timeseries_csv"]
 
 
 def write_timeseries_csv(
@@ -32,9 +36,16 @@ def write_timeseries_csv(
     if missing:
         raise ParameterError(f"{path}: no data for column {missing[0]!r}")
     data = np.column_stack([np.asarray(series[c], dtype=float) for c in columns])
+    fmt = f"{{:.{digits}g}}"
+    write_table(path, columns, [[fmt.format(v) for v in row] for row in data])
+
+
+def write_table(
+    path: str | os.PathLike[str], header: Sequence[str], rows: Sequence[Sequence[object]]
+) -> None:
+    """Write a CSV table atomically (temporary file, then rename)."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(columns)
-    fmt = f"{{:.{digits}g}}"
-    writer.writerows([fmt.format(v) for v in row] for row in data)
+    writer.writerow(header)
+    writer.writerows(rows)
     atomic_write_text(path, buffer.getvalue())

@@ -1,0 +1,145 @@
+"""Identification with a drifting bias and/or an unknown mount rotation (beyond the paper).
+
+:func:`calibrate_extended` is the joint method of :func:`ftcomp.calibration.identify.calibrate`
+with extra parameters: a bias that drifts with time (:mod:`.drift`, ``ftcomp calibrate
+--bias-drift``) and the sensor's mount rotation in the frame the orientations were recorded in
+(:mod:`.mount`, ``--identify-mount``). The fit is :func:`ftcomp.calibration.extended.fit_extended`;
+the result is a :class:`~ftcomp.calibration_record.Calibration` carrying the
+:class:`~ftcomp.calibration_record.BiasDrift` and :class:`~ftcomp.calibration_record.MountRotation`
+it found, with their standard errors.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ftcomp.calibration.drift import drift_from_fit, drift_times
+from ftcomp.calibration.extended import fit_extended, predict_extended
+from ftcomp.calibration.identify import (
+    calibrate,
+    model_from_theta,
+    pose_means,
+    relative_error_percent,
+    standard_errors_from_fit,
+)
+from ftcomp.calibration.methods import fit_paper, joint_sigma
+from ftcomp.calibration.mount import MIN_POSES, mount_from_fit, mount_warnings
+from ftcomp.calibration_record import DRIFT_ORDERS, Calibration, DriftModel, MountAxes
+from ftcomp.errors import IdentificationError
+from ftcomp.samples import Samples
+
+__all__ = ["calibrate_extended"]
+
+_LOO_REFITS: Final = 30  # leave-one-pose-out by exact refits up to this many poses
+
+
+def calibrate_extended(
+    samples: Samples,
+    *,
+    bias_drift: DriftModel = "none",
+    identify_mount: MountAxes | None = None,
+    leave_one_out: bool = True,
+) -> Calibration:
+    """The joint method with a drifting bias and/or an unknown mount rotation.
+
+    Args:
+        samples: readings at distinct poses; a drift model needs their times (``t``).
+        bias_drift: ``"none"``, ``"linear"`` or ``"quadratic"`` in time.
+        identify_mount: None, ``"yaw"`` (about the recorded frame's z) or ``"full"``; the
+            samples' orientations are then the recorded frame's (flange, TCP).
+        leave_one_out: each pose predicted (at its time) by a refit to the others.
+
+    Raises:
+        IdentificationError: no ``t`` for a drift model, too few poses for the parameters.
+    """
+    order = DRIFT_ORDERS.get(bias_drift)
+    if order is None:
+        raise IdentificationError(f"bias drift must be one of {', '.join(DRIFT_ORDERS)}")
+    if order and samples.t is None:
+        raise IdentificationError(
+            f"{samples.source}: --bias-drift {bias_drift} needs each reading's time: the file "
+            "has no 't' (or 't_ns') column"
+        )
+    base = calibrate(samples, method="joint", leave_one_out=False)
+    ids, R, wrench, count, var_mean = pose_means(samples)
+    P = len(ids)
+    needed = 3 + order
+    if identify_mount is not None:
+        needed = max(needed, MIN_POSES[identify_mount])
+    if needed > P:
+        what = [f"--bias-drift {bias_drift}"] if order else []
+        what += [f"--identify-mount {identify_mount}"] if identify_mount else []
+        raise IdentificationError(
+            f"{samples.source}: {P} poses; {' with '.join(what)} needs at least {needed}"
+        )
+    times = drift_times(samples, order) if order else None
+    tau = None if times is None else times.tau
+    paper = fit_paper(wrench, R)
+    sigma = joint_sigma(wrench, R, var_mean, count, paper)
+    fit = fit_extended(
+        wrench, R, sigma, paper.theta, tau=tau, order=order, mount_axes=identify_mount
+    )
+    model = model_from_theta(fit.theta)
+    std_errors = standard_errors_from_fit(fit.theta, fit.covariance)
+    drift = None if times is None else drift_from_fit(fit, times)
+    mount = mount_from_fit(fit) if identify_mount is not None else None
+    R_sensor = R if mount is None else R @ mount.R_rec_sensor
+    predicted = model.predict(R_sensor)
+    if drift is not None and times is not None:
+        predicted = predicted + drift.offset(times.t_s)
+    residuals = wrench - predicted
+    loo = np.full_like(wrench, np.nan)
+    if leave_one_out and needed < P:
+        loo = _leave_one_out(wrench, R, sigma, fit.x, tau, order, identify_mount)
+    warnings = list(base.warnings)
+    if mount is not None:
+        warnings += mount_warnings(mount)
+    return replace(
+        base,
+        model=model,
+        std_errors=std_errors,
+        residuals=residuals,
+        relative_error_percent=relative_error_percent(residuals, wrench),
+        loo_error=loo,
+        warnings=tuple(warnings),
+        bias_drift=drift,
+        mount=mount,
+    )
+
+
+def _leave_one_out(
+    wrench: NDArray[np.float64],
+    R: NDArray[np.float64],
+    sigma: NDArray[np.float64],
+    x: NDArray[np.float64],
+    tau: NDArray[np.float64] | None,
+    order: int,
+    axes: MountAxes | None,
+) -> NDArray[np.float64]:
+    """Each pose's reading minus its prediction by a refit to the others (at its time)."""
+    P = len(wrench)
+    out = np.full_like(wrench, np.nan)
+    basis = (
+        np.column_stack([np.asarray(tau) ** k for k in range(1, order + 1)])
+        if order and tau is not None
+        else np.zeros((P, 0))
+    )
+    n_phi = len(x) - 12 - 6 * order
+    for i in range(min(P, _LOO_REFITS)):
+        keep = np.arange(P) != i
+        fit = fit_extended(
+            wrench[keep],
+            R[keep],
+            sigma[keep],
+            x[:12],
+            tau=None if tau is None else tau[keep],
+            order=order,
+            mount_axes=axes,
+            phi0=x[12 + 6 * order :] if n_phi else None,
+        )
+        out[i] = wrench[i] - predict_extended(fit.x, R[i : i + 1], basis[i : i + 1], order, axes)[0]
+    return out

@@ -1,0 +1,256 @@
+"""What a calibration identified, with its uncertainty: the records calibration produces.
+
+:mod:`ftcomp.calibration` produces these records, :mod:`ftcomp.io` reads and writes them
+(:mod:`ftcomp.io.calibration_json`, :mod:`ftcomp.io.dynamic_json`) and
+:mod:`ftcomp.compensation` applies them; they sit below all three so that none of those needs
+another. The physics of the tool and sensor is :class:`~ftcomp.model.GravityModel`; a record
+here adds what was measured about it:
+
+- :class:`Calibration`: the model plus the evidence for it (standard errors, per-pose
+  residuals, the paper's Table 3, leave-one-pose-out), and optionally
+- :class:`BiasDrift`: the bias as a polynomial in time (``ftcomp calibrate --bias-drift``), and
+- :class:`MountRotation`: the sensor frame in the frame the orientations were recorded in
+  (``ftcomp calibrate --identify-mount``);
+- :class:`DynamicCalibration`: the tool's inertia tensor (``ftcomp calibrate-dynamic``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Final, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from ftcomp.arrays import freeze_field
+from ftcomp.errors import ParameterError
+from ftcomp.model import GravityModel
+
+__all__ = [
+    "DRIFT_ORDERS",
+    "BiasDrift",
+    "Calibration",
+    "DriftModel",
+    "DynamicCalibration",
+    "Method",
+    "MountAxes",
+    "MountRotation",
+    "StandardErrors",
+    "mount_matrix",
+]
+
+#: The identification methods: the paper's two-stage linear fit, or the joint nonlinear fit.
+Method = Literal["paper", "joint"]
+#: The bias drift models: constant, linear or quadratic in time.
+DriftModel = Literal["none", "linear", "quadratic"]
+#: The polynomial order of each drift model.
+DRIFT_ORDERS: Final[dict[str, int]] = {"none": 0, "linear": 1, "quadratic": 2}
+#: The mount models: a yaw about the recorded frame's z axis, or a full rotation.
+MountAxes = Literal["yaw", "full"]
+
+
+@dataclass(frozen=True)
+class StandardErrors:
+    """One standard error per identified quantity, in the quantity's own unit and frame."""
+
+    weight_N: float
+    center_of_gravity_m: NDArray[np.float64]
+    force_bias_N: NDArray[np.float64]
+    torque_bias_Nm: NDArray[np.float64]
+    tilt_U_rad: float
+    tilt_V_rad: float
+    gravity_base_N: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for name in ("center_of_gravity_m", "force_bias_N", "torque_bias_Nm", "gravity_base_N"):
+            freeze_field(self, name, (3,))
+
+
+@dataclass(frozen=True)
+class BiasDrift:
+    """The bias as a polynomial in time: ``bias(t) = [F0, M0] + sum_k c_k (t - t_ref)^k``.
+
+    Attributes:
+        order: 1 (linear) or 2 (quadratic).
+        t_ref_s: reference time [s] (the model's ``F0, M0`` are the bias then).
+        t_min_s, t_max_s: the time range the drift was fitted over [s].
+        coefficients: ``c_k`` per row k = 1..order, ``[N/s^k]*3 + [N*m/s^k]*3``, (order, 6).
+        std_errors: their standard errors, (order, 6).
+    """
+
+    order: int
+    t_ref_s: float
+    t_min_s: float
+    t_max_s: float
+    coefficients: NDArray[np.float64]
+    std_errors: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        if self.order not in (1, 2):
+            raise ParameterError(f"BiasDrift.order must be 1 or 2, got {self.order}")
+        freeze_field(self, "coefficients", (self.order, 6), finite=True)
+        freeze_field(self, "std_errors", (self.order, 6))
+
+    @property
+    def name(self) -> DriftModel:
+        """``"linear"`` or ``"quadratic"``."""
+        return "linear" if self.order == 1 else "quadratic"
+
+    def offset(self, t_s: ArrayLike) -> NDArray[np.float64]:
+        """Bias at ``t_s`` [s] minus the bias at ``t_ref``, shape (N, 6) (or (6,))."""
+        dt = np.asarray(t_s, dtype=float) - self.t_ref_s
+        out = np.multiply.outer(dt, self.coefficients[0])
+        if self.order == 2:
+            out += np.multiply.outer(dt * dt, self.coefficients[1])
+        return out
+
+
+def mount_matrix(phi: NDArray[np.float64], axes: MountAxes | None) -> NDArray[np.float64]:
+    """``R_rec_sensor`` for the mount parameters: yaw ``(psi,)`` [rad] about the recorded
+    frame's z axis, or a rotation vector (3,) [rad]; the identity without a mount."""
+    if axes is None:
+        return np.eye(3)
+    rotvec = np.array([0.0, 0.0, phi[0]]) if axes == "yaw" else np.asarray(phi, dtype=float)
+    return np.asarray(Rotation.from_rotvec(rotvec).as_matrix(), dtype=float)
+
+
+@dataclass(frozen=True)
+class MountRotation:
+    """``R_rec_sensor``: the sensor frame in the frame the orientations were recorded in.
+
+    Attributes:
+        axes: ``"yaw"`` (about the recorded frame's z axis) or ``"full"``.
+        R_rec_sensor: shape (3, 3).
+        angles_rad: yaw (1,) or rotation vector (3,) [rad].
+        std_errors_rad: their standard errors [rad], same shape.
+    """
+
+    axes: MountAxes
+    R_rec_sensor: NDArray[np.float64]
+    angles_rad: NDArray[np.float64]
+    std_errors_rad: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        if self.axes not in ("yaw", "full"):
+            raise ParameterError(f"MountRotation.axes must be 'yaw' or 'full', got {self.axes!r}")
+        n = 1 if self.axes == "yaw" else 3
+        freeze_field(self, "R_rec_sensor", (3, 3), finite=True)
+        freeze_field(self, "angles_rad", (n,), finite=True)
+        freeze_field(self, "std_errors_rad", (n,))
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The result of an identification: the model plus the evidence for it.
+
+    Attributes:
+        model: the identified :class:`~ftcomp.model.GravityModel`.
+        method: ``"paper"`` or ``"joint"``.
+        std_errors: standard error of every parameter.
+        pose_ids: the id of each pose, in the order of the per-pose arrays.
+        R_base_sensor: orientation of each pose, shape (P, 3, 3).
+        wrench_mean: mean reading at each pose [N, N*m], shape (P, 6).
+        readings_per_pose: how many readings were averaged at each pose, shape (P,).
+        residuals: ``wrench_mean - model.predict(R)`` per pose, shape (P, 6).
+        relative_error_percent: the paper's Table 3, ``100 |residual| / |wrench_mean|``, (P, 6).
+        loo_error: leave-one-pose-out prediction error per pose (NaN where the other poses
+            could not identify the model), shape (P, 6).
+        condition_number: of the force regressor (Eq. 7); large means poses too alike.
+        warnings: human-readable warnings.
+        bias_drift: the bias as a function of time (``--bias-drift``), or None: constant.
+        mount: the sensor frame's rotation in the frame the orientations were recorded in
+            (``--identify-mount``), or None: the orientations are the sensor's.
+    """
+
+    model: GravityModel
+    method: Method
+    std_errors: StandardErrors
+    pose_ids: tuple[str, ...]
+    R_base_sensor: NDArray[np.float64] = field(repr=False)
+    wrench_mean: NDArray[np.float64] = field(repr=False)
+    readings_per_pose: NDArray[np.float64] = field(repr=False)
+    residuals: NDArray[np.float64] = field(repr=False)
+    relative_error_percent: NDArray[np.float64] = field(repr=False)
+    loo_error: NDArray[np.float64] = field(repr=False)
+    condition_number: float = math.inf
+    warnings: tuple[str, ...] = ()
+    bias_drift: BiasDrift | None = None
+    mount: MountRotation | None = None
+
+    def __post_init__(self) -> None:
+        n = len(self.pose_ids)
+        for name, shape in (
+            ("R_base_sensor", (n, 3, 3)),
+            ("wrench_mean", (n, 6)),
+            ("readings_per_pose", (n,)),
+            ("residuals", (n, 6)),
+            ("relative_error_percent", (n, 6)),
+            ("loo_error", (n, 6)),
+        ):
+            freeze_field(self, name, shape)
+
+    @property
+    def residual_rms(self) -> tuple[float, float]:
+        """RMS of the force [N] and torque [N*m] residuals over poses and axes."""
+        r = self.residuals
+        if not len(r):
+            return math.nan, math.nan
+        return float(np.sqrt(np.mean(r[:, :3] ** 2))), float(np.sqrt(np.mean(r[:, 3:] ** 2)))
+
+    @property
+    def relative_error_mean_percent(self) -> NDArray[np.float64]:
+        """Mean of the Table-3 relative errors per axis, shape (6,) (the paper's delta row)."""
+        relative = self.relative_error_percent
+        seen = np.isfinite(relative).any(axis=0)  # an axis without any: NaN, and no warning
+        out = np.full(6, np.nan)
+        out[seen] = np.nanmean(relative[:, seen], axis=0)
+        return out
+
+    @property
+    def loo_rms(self) -> tuple[float, float]:
+        """RMS leave-one-pose-out prediction error: force [N], torque [N*m]."""
+        e = self.loo_error
+        if not np.any(np.isfinite(e)):
+            return math.nan, math.nan
+        with np.errstate(invalid="ignore"):
+            return (
+                float(np.sqrt(np.nanmean(e[:, :3] ** 2))),
+                float(np.sqrt(np.nanmean(e[:, 3:] ** 2))),
+            )
+
+
+@dataclass(frozen=True)
+class DynamicCalibration:
+    """The tool's inertia, identified (the static parameters come from the static calibration).
+
+    Attributes:
+        inertia_cog_kgm2: inertia tensor about the centre of gravity, sensor axes, (3, 3).
+        std_error_kgm2: standard errors of ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)``, (6,).
+        residual_rms_Nm: RMS torque residual per axis after the fit, (3,).
+        samples: readings used.
+        duration_s: recorded time [s].
+        peak_alpha_rad_s2: peak |angular acceleration| about each sensor axis, (3,).
+        peak_omega_rad_s: peak |angular velocity| about each sensor axis, (3,).
+        peak_accel_mps2: peak |linear acceleration| of the sensor origin [m/s^2].
+    """
+
+    inertia_cog_kgm2: NDArray[np.float64] = field(repr=False)
+    std_error_kgm2: NDArray[np.float64] = field(repr=False)
+    residual_rms_Nm: NDArray[np.float64] = field(repr=False)
+    samples: int
+    duration_s: float
+    peak_alpha_rad_s2: NDArray[np.float64] = field(repr=False)
+    peak_omega_rad_s: NDArray[np.float64] = field(repr=False)
+    peak_accel_mps2: float
+
+    def __post_init__(self) -> None:
+        for name, shape in (
+            ("inertia_cog_kgm2", (3, 3)),
+            ("std_error_kgm2", (6,)),
+            ("residual_rms_Nm", (3,)),
+            ("peak_alpha_rad_s2", (3,)),
+            ("peak_omega_rad_s", (3,)),
+        ):
+            freeze_field(self, name, shape)
