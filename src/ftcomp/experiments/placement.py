@@ -360,7 +360,7 @@ def write_placement_outputs(
     """
     from ftcomp.io.atomic import atomic_write_text
     from ftcomp.io.timeseries import write_timeseries_csv
-    from ftcomp.report.figures import plot_placement
+    from ftcomp.views.figures import plot_placement
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

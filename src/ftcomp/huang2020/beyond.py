@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from ftcomp import paper
 from ftcomp.calibration.identify import Calibration, calibrate
 from ftcomp.compensation.online import OnlineLoadCompensator
-from ftcomp.experiments.gravity import collect_paper_poses
+from ftcomp.huang2020.gravity import collect_paper_poses
 from ftcomp.sim.cell import HOME_Q_RAD, SimCell
 from ftcomp.sim.scene import SceneConfig
 from ftcomp.sim.sensor import SensorSpec
