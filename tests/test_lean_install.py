@@ -1,9 +1,10 @@
 """The lean install: without MuJoCo and matplotlib the core commands run, and a command that
 needs an extra says in one line which one to install (exit code 2).
 
-Each command runs in its own interpreter where ``import mujoco`` and ``import matplotlib`` fail
-(a ``sys.meta_path`` finder raises ``ModuleNotFoundError`` for them, as a fresh
-``pip install ftcomp`` would), so nothing can have imported them before.
+Each command runs in its own interpreter where ``import mujoco``, ``import matplotlib`` and
+``import pytransform3d`` (the extra ``urdf``, which requires matplotlib) fail (a
+``sys.meta_path`` finder raises ``ModuleNotFoundError`` for them, as after a fresh
+``pip install ftcomp``), so nothing can have imported them before.
 """
 
 from __future__ import annotations
@@ -19,15 +20,15 @@ from conftest import PAPER_CSV
 sys.path.insert(0, str(Path(__file__).parent / "ros2"))
 from simbag import WRENCH_TOPIC, recording, write_bag
 
-#: Runs ``ftcomp ARGS`` (or, with ``--python CODE``, the code) with MuJoCo and matplotlib
-#: impossible to import.
+#: Runs ``ftcomp ARGS`` (or, with ``--python CODE``, the code) with MuJoCo, matplotlib and
+#: pytransform3d impossible to import.
 LEAN = """
 import sys
 
 
 class NotInstalled:
     def find_spec(self, name, path=None, target=None):
-        if name.partition(".")[0] in ("mujoco", "matplotlib"):
+        if name.partition(".")[0] in ("mujoco", "matplotlib", "pytransform3d"):
             raise ModuleNotFoundError(f"No module named {name!r}", name=name)
         return None
 
@@ -54,7 +55,7 @@ def lean(*args: str | Path) -> subprocess.CompletedProcess[str]:
 
 
 def test_mujoco_and_matplotlib_cannot_be_imported_there() -> None:
-    for module in ("mujoco", "matplotlib.figure"):
+    for module in ("mujoco", "matplotlib.figure", "pytransform3d.urdf"):
         done = lean("--python", f"import {module}")
         assert done.returncode == 1 and "ModuleNotFoundError" in done.stderr, done.stderr
 
@@ -83,6 +84,16 @@ def test_calibrate_compensate_export_and_import_bag_run_without_the_extras(
         assert done.returncode == 0, f"ftcomp {args[0]}: {done.stderr}"
     for path in (cal, out, params, samples, tmp_path / "cal_from_bag.json"):
         assert path.stat().st_size > 0, path
+
+
+def test_import_bag_with_a_urdf_names_the_urdf_extra(tmp_path: Path, bag: Path) -> None:
+    urdf = tmp_path / "robot.urdf"
+    urdf.write_text(recording().urdf)
+    args = ["import-bag", bag, "--wrench-topic", WRENCH_TOPIC, "--base-frame", "base"]
+    route = ["--urdf", urdf, "--joint-states", "/joint_states"]
+    done = lean(*args, "--sensor-frame", "ft_sensor", *route, "-o", tmp_path / "s.csv")
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == "error: reading a URDF needs pytransform3d: pip install 'ftcomp[urdf]'\n"
 
 
 @pytest.mark.parametrize(

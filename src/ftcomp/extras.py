@@ -2,7 +2,8 @@
 
 ``pip install ftcomp`` gives calibration, compensation, file I/O and the hardware backends'
 core. The simulated cell needs MuJoCo (extra ``sim``), plots need matplotlib (extra ``report``),
-the paper's demo both (extra ``demo``). :func:`require_extra` says in one line which extra to
+the paper's demo both (extra ``demo``), reading a URDF needs pytransform3d (extra ``urdf``; it
+requires matplotlib itself). :func:`require_extra` says in one line which extra to
 install when one is missing.
 """
 
@@ -19,10 +20,11 @@ EXTRAS: dict[str, tuple[str, ...]] = {
     "demo": ("mujoco", "matplotlib"),
     "report": ("matplotlib",),
     "sim": ("mujoco",),
+    "urdf": ("pytransform3d",),
 }
 
 #: How a message names each optional module.
-_DISPLAY_NAME = {"mujoco": "MuJoCo", "matplotlib": "matplotlib"}
+_DISPLAY_NAME = {"mujoco": "MuJoCo", "matplotlib": "matplotlib", "pytransform3d": "pytransform3d"}
 
 
 def _importable(module: str) -> bool:
