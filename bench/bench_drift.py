@@ -2,7 +2,7 @@
 
 Run by hand (not a test): ``.venv/bin/python bench/bench_drift.py [--seeds 5] [--walk-N 0.05]``.
 
-Each seed runs :func:`ftcomp.experiments.drift_sim.run_drift_experiment` (the MuJoCo cell by
+Each seed runs :func:`ftcomp.huang2020.drift_sim.run_drift_experiment` (the MuJoCo cell by
 URI with a drifting sensor, recorded as ``ftcomp record`` does): 12 D-optimal orientations
 visited twice in shuffled passes (500 readings each), a few tenths of a newton of drift over
 the recording; leave-one-orientation-out errors of the ``none``, ``linear`` and ``quadratic``
@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from ftcomp.experiments.drift_sim import DriftSetup, run_drift_experiment
+from ftcomp.huang2020.drift_sim import DriftSetup, run_drift_experiment
 
 COLUMNS = (
     "none/floor",

@@ -13,6 +13,7 @@ __all__ = [
     "HardwareError",
     "IdentificationError",
     "InputFileError",
+    "MissingExtraError",
     "OrientationError",
     "ParameterError",
     "SimulationError",
@@ -42,6 +43,11 @@ class OrientationError(FtcompError, ValueError):
 
 class IdentificationError(FtcompError):
     """The calibration parameters cannot be identified from the given poses."""
+
+
+class MissingExtraError(FtcompError, ImportError):
+    """An optional dependency is not installed; the message names the extra that installs it
+    (``pip install 'ftcomp[sim]'``)."""
 
 
 class HardwareError(FtcompError):

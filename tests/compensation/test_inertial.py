@@ -9,7 +9,7 @@ from tests.compensation.test_kinematics import analytic_path
 from ftcomp.compensation.inertial import InertialCompensator
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
-from ftcomp.experiments.beyond_inertial import excitation_moves, record_moves
+from ftcomp.huang2020.beyond_inertial import excitation_moves, record_moves
 from ftcomp.kinematics import inertial_wrench, sensor_motion
 from ftcomp.model import GravityModel
 from ftcomp.sim.cell import HOME_Q_RAD, SimCell

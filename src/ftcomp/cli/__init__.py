@@ -17,7 +17,7 @@ from typing import NoReturn
 
 from ftcomp import __version__
 
-__all__ = ["COMMANDS", "SIM_COMMANDS", "build_parser", "main"]
+__all__ = ["COMMANDS", "COMMAND_EXTRAS", "SIM_COMMANDS", "build_parser", "main"]
 
 EXIT_BAD_INPUT = 2
 #: Exit code when the reader of standard output went away (128 + SIGPIPE, as a shell's).
@@ -66,6 +66,11 @@ SIM_COMMANDS: dict[str, tuple[str, str]] = {
         "place a grasped load on a sponge or a book (position-only or admittance)",
     ),
 }
+
+#: Commands that need an extra beyond the lean install (``pip install ftcomp``), checked before
+#: the command runs so that a missing one is a single line naming it, exit code 2:
+#: ``error: ftcomp demo needs MuJoCo and matplotlib: pip install 'ftcomp[demo]'``.
+COMMAND_EXTRAS: dict[str, str] = {"demo": "demo", "sim collect": "sim", "sim place": "demo"}
 
 
 def _chosen(argv: Sequence[str], names: Sequence[str]) -> str | None:
@@ -116,8 +121,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args_list = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(args_list).parse_args(args_list)
     from ftcomp.errors import FtcompError
+    from ftcomp.extras import require_extra
 
+    name = " ".join(c for c in (args.command, vars(args).get("sim_command")) if c)
     try:
+        if name in COMMAND_EXTRAS:
+            require_extra(COMMAND_EXTRAS[name], f"ftcomp {name}")
         code: int = args.handler(args)
     except FtcompError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -106,7 +106,7 @@ def register(p: argparse.ArgumentParser) -> None:
 def _run(args: argparse.Namespace) -> int:
     from ftcomp.io.atomic import prepare_output_dir
     from ftcomp.io.calibration_json import load_calibration, save_calibration
-    from ftcomp.report.figures import plot_placement
+    from ftcomp.views.figures import plot_placement
     from ftcomp.session.placement import (
         DEFAULT_GAINS,
         PlacementConfig,

@@ -22,12 +22,14 @@ from typing import TYPE_CHECKING, TypeAlias
 
 import numpy as np
 from numpy.typing import NDArray
-from pytransform3d.urdf import Joint, parse_urdf
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import InputFileError
+from ftcomp.extras import require_extra
 
 if TYPE_CHECKING:
+    from pytransform3d.urdf import Joint
+
     from ftcomp.ros2.bag import JointStates
 
 __all__ = ["UrdfChain"]
@@ -48,7 +50,14 @@ _I3 = np.eye(3)
 
 
 def _read(path: str | Path) -> tuple[set[str], list[Joint]]:
-    """The link names and joints of a URDF file."""
+    """The link names and joints of a URDF file.
+
+    Raises:
+        MissingExtraError: pytransform3d (the extra ``urdf``) is not installed.
+    """
+    require_extra("urdf", "reading a URDF")
+    from pytransform3d.urdf import parse_urdf
+
     try:
         text = Path(path).read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:

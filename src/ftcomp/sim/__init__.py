@@ -36,7 +36,12 @@ protocols as on a real arm, with the truth behind them::
     samples.wrench_sensor, samples.R_base_sensor, samples.pose, samples.t  # truth: GravityModel
 """
 
+# ruff: noqa: E402  (MuJoCo is checked before the modules that import it)
 from __future__ import annotations
+
+from ftcomp.extras import require_extra
+
+require_extra("sim", "the simulated cell (ftcomp sim, sim://)")
 
 from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmSpec, c4_like_arm
 from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, HOME_Q_RAD, SimCell

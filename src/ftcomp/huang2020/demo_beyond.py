@@ -1,33 +1,37 @@
 """The demo's "beyond the paper" section: a load weighed online while the arm moves, and
 inertial compensation of a fast move.
 
-Runs :mod:`ftcomp.experiments.beyond` (a 500 g load grasped and released during a slow move; motion
-without grasping for false detections) and :mod:`ftcomp.experiments.beyond_inertial` (the inertia
+Runs :mod:`ftcomp.huang2020.beyond` (a 500 g load grasped and released during a slow move; motion
+without grasping for false detections) and :mod:`ftcomp.huang2020.beyond_inertial` (the inertia
 identified, then a fast move compensated statically and inertially), writes their CSVs and
-figures and returns the metrics and the report section; :mod:`ftcomp.experiments.demo`
+figures and returns the metrics and the report section; :mod:`ftcomp.huang2020.demo`
 orchestrates.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from ftcomp.experiments.beyond import run_grasp_during_move, run_motion_without_grasp
-from ftcomp.experiments.beyond_inertial import EVALUATION_FILTER, FastMoveRun, run_fast_move
+from ftcomp.arrays import freeze_field
+from ftcomp.huang2020.beyond import run_grasp_during_move, run_motion_without_grasp
+from ftcomp.huang2020.beyond_inertial import EVALUATION_FILTER, FastMoveRun, run_fast_move
+from ftcomp.huang2020.figures import plot_fast_move, plot_online_load
+from ftcomp.huang2020.settings import Advance, DemoSettings
 from ftcomp.io.tables import write_table
-from ftcomp.report.figures import plot_fast_move, plot_online_load
-from ftcomp.report.html import Figure, Mark, Section, Table
+from ftcomp.views.html import Figure, Mark, Section, Table
 
-if TYPE_CHECKING:
-    from ftcomp.experiments.demo import DemoSettings
-
-__all__ = ["beyond_section"]
-
-Advance = Callable[[str], None]
+__all__ = [
+    "BeyondMetrics",
+    "InertialMetrics",
+    "NoGraspMetrics",
+    "OnlineLoadMetrics",
+    "beyond_section",
+]
 
 #: The issue's bounds: 1 s after the grasp, mass within 1 % and centre of gravity within 2 mm;
 #: release detected within 0.2 s; no false grasp.
@@ -38,10 +42,159 @@ _RELEASE_BOUND_S = 0.2
 #: Inertial compensation's RMS force error at most this fraction of the static-only one.
 _INERTIAL_RATIO_BOUND = 0.2
 
+#: The six independent entries of an inertia tensor: Ixx, Iyy, Izz, Ixy, Ixz, Iyz.
+_THETA_INDEX = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
+
+
+@dataclass(frozen=True)
+class OnlineLoadMetrics:
+    """A load grasped and released during a slow move, weighed online, against the truth.
+
+    Attributes:
+        true_mass_kg: the load's mass [kg].
+        true_cog_m: its centre of gravity, sensor frame [m], (3,).
+        grasp_s: when the gripper grasped [s].
+        release_s: when it released [s].
+        grasp_detected_after_s: detection delay of the grasp [s] (nan: never detected).
+        release_detected_after_s: detection delay of the release [s] (nan: never detected).
+        converged_after_s: from the grasp to the estimate in use [s] (nan: never).
+        mass_kg_1s_after_grasp: the mass estimate 1 s after the grasp [kg].
+        mass_std_kg_1s_after_grasp: its standard deviation [kg].
+        mass_rel_error_1s_after_grasp: |estimate - truth| / truth.
+        cog_m_1s_after_grasp: the centre-of-gravity estimate then [m], (3,).
+        cog_error_m_1s_after_grasp: its distance from the truth [m].
+        events: every confirmed step, ``(kind, time [s])``.
+        holds: whether the issue's bounds hold (mass, centre of gravity, release delay).
+    """
+
+    true_mass_kg: float
+    true_cog_m: NDArray[np.float64]
+    grasp_s: float
+    release_s: float
+    grasp_detected_after_s: float
+    release_detected_after_s: float
+    converged_after_s: float
+    mass_kg_1s_after_grasp: float
+    mass_std_kg_1s_after_grasp: float
+    mass_rel_error_1s_after_grasp: float
+    cog_m_1s_after_grasp: NDArray[np.float64]
+    cog_error_m_1s_after_grasp: float
+    events: tuple[tuple[str, float], ...]
+    holds: bool
+
+    def __post_init__(self) -> None:
+        freeze_field(self, "true_cog_m", (3,))
+        freeze_field(self, "cog_m_1s_after_grasp", (3,))
+
+    def to_json(self) -> dict[str, Any]:
+        """The entry ``beyond_paper.online_load`` of ``metrics.json``."""
+        return {
+            "true_mass_kg": self.true_mass_kg,
+            "true_cog_m": self.true_cog_m,
+            "grasp_s": self.grasp_s,
+            "release_s": self.release_s,
+            "grasp_detected_after_s": self.grasp_detected_after_s,
+            "release_detected_after_s": self.release_detected_after_s,
+            "converged_after_s": self.converged_after_s,
+            "mass_kg_1s_after_grasp": self.mass_kg_1s_after_grasp,
+            "mass_std_kg_1s_after_grasp": self.mass_std_kg_1s_after_grasp,
+            "mass_rel_error_1s_after_grasp": self.mass_rel_error_1s_after_grasp,
+            "cog_m_1s_after_grasp": self.cog_m_1s_after_grasp,
+            "cog_error_m_1s_after_grasp": self.cog_error_m_1s_after_grasp,
+            "events": [{"kind": k, "t_s": t} for k, t in self.events],
+            "holds": self.holds,
+        }
+
+
+@dataclass(frozen=True)
+class NoGraspMetrics:
+    """Motion with the empty gripper: grasps the detector (wrongly) reports.
+
+    Attributes:
+        duration_s: how long the arm moved [s].
+        false_grasps: grasps reported.
+        other_events: other steps reported.
+        peak_joint_speed_rad_s: the fastest joint speed of the motion [rad/s].
+    """
+
+    duration_s: float
+    false_grasps: int
+    other_events: int
+    peak_joint_speed_rad_s: float
+
+    def to_json(self) -> dict[str, Any]:
+        """The entry ``beyond_paper.no_grasp_motion`` of ``metrics.json``."""
+        return {
+            "duration_s": self.duration_s,
+            "false_grasps": self.false_grasps,
+            "other_events": self.other_events,
+            "peak_joint_speed_rad_s": self.peak_joint_speed_rad_s,
+        }
+
+
+@dataclass(frozen=True)
+class InertialMetrics:
+    """A fast contact-free move compensated statically and inertially, and the inertia used.
+
+    Attributes:
+        run: the move (forces, RMS errors, peaks, the identified inertia and its truth).
+        holds: whether the inertial RMS error is at most 20 % of the static-only one.
+    """
+
+    run: FastMoveRun = field(repr=False)
+    holds: bool
+
+    @property
+    def identified_inertia_kgm2(self) -> NDArray[np.float64]:
+        """Ixx, Iyy, Izz, Ixy, Ixz, Iyz as identified [kg*m^2], (6,)."""
+        return np.asarray(self.run.dynamic.inertia_cog_kgm2[_THETA_INDEX], dtype=np.float64)
+
+    @property
+    def true_inertia_kgm2(self) -> NDArray[np.float64]:
+        """The same entries of the simulated tool's inertia [kg*m^2], (6,)."""
+        return np.asarray(self.run.true_inertia_kgm2[_THETA_INDEX], dtype=np.float64)
+
+    def to_json(self) -> dict[str, Any]:
+        """The entry ``beyond_paper.inertial`` of ``metrics.json``."""
+        fast = self.run
+        return {
+            "peak_accel_mps2": fast.peak_accel_mps2,
+            "peak_omega_rad_s": fast.peak_omega_rad_s,
+            "static_rms_force_error_N": fast.static_rms_N,
+            "inertial_rms_force_error_N": fast.inertial_rms_N,
+            "ratio": fast.ratio,
+            "static_rms_force_error_unfiltered_N": fast.static_rms_raw_N,
+            "inertial_rms_force_error_unfiltered_N": fast.inertial_rms_raw_N,
+            "evaluation_filter": {"window_s": EVALUATION_FILTER[0], "order": EVALUATION_FILTER[1]},
+            "identified_inertia_kgm2": self.identified_inertia_kgm2,
+            "inertia_std_error_kgm2": fast.dynamic.std_error_kgm2,
+            "true_inertia_kgm2": self.true_inertia_kgm2,
+            "excitation_duration_s": fast.dynamic.duration_s,
+            "holds": self.holds,
+        }
+
+
+@dataclass(frozen=True)
+class BeyondMetrics:
+    """The "beyond the paper" section: online load estimation and inertial compensation."""
+
+    online_load: OnlineLoadMetrics
+    no_grasp_motion: NoGraspMetrics
+    inertial: InertialMetrics
+
+    def to_json(self) -> dict[str, Any]:
+        """The section's entry of ``metrics.json``."""
+        return {
+            "online_load": self.online_load.to_json(),
+            "no_grasp_motion": self.no_grasp_motion.to_json(),
+            "inertial": self.inertial.to_json(),
+        }
+
 
 def beyond_section(
     out: Path, settings: DemoSettings, advance: Advance
-) -> tuple[dict[str, Any], Section]:
+) -> tuple[BeyondMetrics, Section]:
+    """Online load estimation and inertial compensation: files, figures, metrics, section."""
     samples = min(200, settings.samples_per_pose)
     run = run_grasp_during_move(seed=settings.seed + 400, samples_per_pose=samples)
     advance("beyond the paper: grasp during a move")
@@ -53,7 +206,7 @@ def beyond_section(
     advance("beyond the paper: motion without grasping")
     fast = run_fast_move(seed=settings.seed + 402, samples_per_pose=samples)
     advance("beyond the paper: inertial compensation of a fast move")
-    fast_metrics, fast_table, fast_figure = _fast_part(out, fast)
+    inertial, fast_table, fast_figure = _fast_part(out, fast)
 
     i = run.at(run.grasp_s + _AFTER_GRASP_S)
     mass_err = abs(float(run.mass_kg[i]) - run.true_mass_kg) / run.true_mass_kg
@@ -62,35 +215,35 @@ def beyond_section(
     grasp_delay = run.detected_grasp_s - run.grasp_s
     held = [k for k, s in enumerate(run.state) if s == "holding"]
     converged_s = run.t[held[0]] - run.grasp_s if held else float("nan")
-    metrics: dict[str, Any] = {
-        "online_load": {
-            "true_mass_kg": run.true_mass_kg,
-            "true_cog_m": run.true_cog_m,
-            "grasp_s": run.grasp_s,
-            "release_s": run.release_s,
-            "grasp_detected_after_s": grasp_delay,
-            "release_detected_after_s": release_delay,
-            "converged_after_s": converged_s,
-            "mass_kg_1s_after_grasp": run.mass_kg[i],
-            "mass_std_kg_1s_after_grasp": run.mass_std_kg[i],
-            "mass_rel_error_1s_after_grasp": mass_err,
-            "cog_m_1s_after_grasp": run.cog_m[i],
-            "cog_error_m_1s_after_grasp": cog_err,
-            "events": [{"kind": k, "t_s": t} for k, t in run.events],
-            "holds": bool(
+    metrics = BeyondMetrics(
+        online_load=OnlineLoadMetrics(
+            true_mass_kg=run.true_mass_kg,
+            true_cog_m=run.true_cog_m,
+            grasp_s=run.grasp_s,
+            release_s=run.release_s,
+            grasp_detected_after_s=grasp_delay,
+            release_detected_after_s=release_delay,
+            converged_after_s=converged_s,
+            mass_kg_1s_after_grasp=float(run.mass_kg[i]),
+            mass_std_kg_1s_after_grasp=float(run.mass_std_kg[i]),
+            mass_rel_error_1s_after_grasp=mass_err,
+            cog_m_1s_after_grasp=run.cog_m[i],
+            cog_error_m_1s_after_grasp=cog_err,
+            events=tuple(run.events),
+            holds=bool(
                 mass_err <= _MASS_BOUND
                 and cog_err <= _COG_BOUND_M
                 and 0.0 <= release_delay <= _RELEASE_BOUND_S
             ),
-        },
-        "no_grasp_motion": {
-            "duration_s": idle.duration_s,
-            "false_grasps": idle.false_grasps,
-            "other_events": len(idle.events) - idle.false_grasps,
-            "peak_joint_speed_rad_s": idle.peak_joint_speed_rad_s,
-        },
-        "inertial": fast_metrics,
-    }
+        ),
+        no_grasp_motion=NoGraspMetrics(
+            duration_s=idle.duration_s,
+            false_grasps=idle.false_grasps,
+            other_events=len(idle.events) - idle.false_grasps,
+            peak_joint_speed_rad_s=idle.peak_joint_speed_rad_s,
+        ),
+        inertial=inertial,
+    )
     header = ["t", "mass_kg", "mass_std_kg", "cx_m", "cy_m", "cz_m", "fx", "fy", "fz", "state"]
     data = np.column_stack([run.t, run.mass_kg, run.mass_std_kg, run.cog_m, run.contact_force_N])
     rows = [[*(f"{v:.6g}" for v in r), s] for r, s in zip(data, run.state, strict=True)]
@@ -115,7 +268,7 @@ def beyond_section(
         out / figure.path,
         title=figure.title,
     )
-    ok = metrics["online_load"]["holds"] and idle.false_grasps == 0
+    ok = metrics.online_load.holds and idle.false_grasps == 0
 
     def mark(good: bool) -> Mark:
         return Mark("yes" if good else "no", "good" if good else "bad")
@@ -189,23 +342,8 @@ def beyond_section(
     return metrics, section
 
 
-def _fast_part(out: Path, fast: FastMoveRun) -> tuple[dict[str, Any], Table, Figure]:
-    theta_idx = ([0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2])
-    metrics: dict[str, Any] = {
-        "peak_accel_mps2": fast.peak_accel_mps2,
-        "peak_omega_rad_s": fast.peak_omega_rad_s,
-        "static_rms_force_error_N": fast.static_rms_N,
-        "inertial_rms_force_error_N": fast.inertial_rms_N,
-        "ratio": fast.ratio,
-        "static_rms_force_error_unfiltered_N": fast.static_rms_raw_N,
-        "inertial_rms_force_error_unfiltered_N": fast.inertial_rms_raw_N,
-        "evaluation_filter": {"window_s": EVALUATION_FILTER[0], "order": EVALUATION_FILTER[1]},
-        "identified_inertia_kgm2": fast.dynamic.inertia_cog_kgm2[theta_idx],
-        "inertia_std_error_kgm2": fast.dynamic.std_error_kgm2,
-        "true_inertia_kgm2": fast.true_inertia_kgm2[theta_idx],
-        "excitation_duration_s": fast.dynamic.duration_s,
-        "holds": bool(fast.ratio <= _INERTIAL_RATIO_BOUND),
-    }
+def _fast_part(out: Path, fast: FastMoveRun) -> tuple[InertialMetrics, Table, Figure]:
+    metrics = InertialMetrics(fast, holds=bool(fast.ratio <= _INERTIAL_RATIO_BOUND))
     data = np.column_stack([fast.t, fast.static_force_N, fast.inertial_force_N])
     header = [
         "t",
@@ -228,7 +366,7 @@ def _fast_part(out: Path, fast: FastMoveRun) -> tuple[dict[str, Any], Table, Fig
         fast.t, fast.static_force_N, fast.inertial_force_N, out / figure.path, title=figure.title
     )
     good = fast.ratio <= _INERTIAL_RATIO_BOUND
-    true = fast.true_inertia_kgm2[theta_idx]
+    true = metrics.true_inertia_kgm2
     rows: list[list[Any]] = [
         [
             "RMS force error, inertial / static only",
@@ -240,7 +378,7 @@ def _fast_part(out: Path, fast: FastMoveRun) -> tuple[dict[str, Any], Table, Fig
             [f"{name} [kg·m²]", f"truth {tv:.3e}", f"{v:.3e} ± {e:.1e}", Mark("", "note")]
             for name, v, e, tv in zip(
                 ("Ixx", "Iyy", "Izz", "Ixy", "Ixz", "Iyz"),
-                metrics["identified_inertia_kgm2"],
+                metrics.identified_inertia_kgm2,
                 fast.dynamic.std_error_kgm2,
                 true,
                 strict=True,

@@ -1,4 +1,4 @@
-"""A self-contained HTML report: sections of text, tables and PNG figures lying beside it.
+"""A self-contained HTML page: sections of text, tables and PNG figures lying beside it.
 
 The page has no scripts and no external resources, so it opens offline in any browser; figures
 are referenced by relative path (``<img src="fig.png">``) from the report's folder. Tables and

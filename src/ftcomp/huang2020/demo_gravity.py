@@ -1,39 +1,176 @@
 """The demo's gravity sections after the calibration: continuous pose change (Fig. 5), Tables 3
-and 4. Each runs its experiment (:mod:`ftcomp.experiments.gravity`), writes its files and returns
-its metrics and its report section; :mod:`ftcomp.experiments.demo` orchestrates.
+and 4. Each runs its experiment (:mod:`ftcomp.huang2020.gravity`), writes its files and returns
+its metrics record and its report section; :mod:`ftcomp.huang2020.demo` orchestrates.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ftcomp import paper
+from ftcomp.arrays import freeze_field
 from ftcomp.calibration_record import Calibration
-from ftcomp.experiments import gravity
+from ftcomp.huang2020 import gravity
+from ftcomp.huang2020.figures import plot_continuous_pose, plot_table3, plot_table4
+from ftcomp.huang2020.settings import Advance, DemoSettings
 from ftcomp.io.tables import write_table
-from ftcomp.report.figures import plot_continuous_pose, plot_table3, plot_table4
-from ftcomp.report.html import Figure, Section, Table
 from ftcomp.samples import WRENCH_COLUMNS
+from ftcomp.views.html import Figure, Section, Table
 
-if TYPE_CHECKING:
-    from ftcomp.experiments.demo import DemoSettings
+__all__ = [
+    "ContinuousPoseMetrics",
+    "Table3Metrics",
+    "Table4Metrics",
+    "continuous_section",
+    "tables_section",
+]
 
-__all__ = ["continuous_section", "tables_section"]
 
-Advance = Callable[[str], None]
+def _by_axis(values: NDArray[np.float64]) -> dict[str, float]:
+    return dict(zip(WRENCH_COLUMNS, values.tolist(), strict=True))
 
 
-def _vec(v: np.ndarray, digits: int = 4) -> str:
-    return "(" + ", ".join(f"{x:+.{digits}f}" for x in v) + ")"
+@dataclass(frozen=True)
+class ContinuousPoseMetrics:
+    """Fig. 5: the compensation error while the orientation changes, holding a load.
+
+    Attributes:
+        load_kg: the load held [kg].
+        from_deg: the paper angles at the start [deg].
+        to_deg: the paper angles at the end [deg].
+        duration_s: duration of the change [s].
+        samples: readings taken.
+        error_rms: RMS of the error per axis [N, N*m], (6,).
+        error_mean: mean of the error per axis [N, N*m], (6,).
+        measured_range: peak-to-peak of the readings per axis [N, N*m], (6,).
+    """
+
+    load_kg: float
+    from_deg: tuple[float, ...]
+    to_deg: tuple[float, ...]
+    duration_s: float
+    samples: int
+    error_rms: NDArray[np.float64] = field(repr=False)
+    error_mean: NDArray[np.float64] = field(repr=False)
+    measured_range: NDArray[np.float64] = field(repr=False)
+
+    def __post_init__(self) -> None:
+        for name in ("error_rms", "error_mean", "measured_range"):
+            freeze_field(self, name, (6,))
+
+    def to_json(self) -> dict[str, Any]:
+        """The section's entry of ``metrics.json``."""
+        return {
+            "load_kg": self.load_kg,
+            "from_deg": list(self.from_deg),
+            "to_deg": list(self.to_deg),
+            "duration_s": self.duration_s,
+            "samples": self.samples,
+            "error_rms": _by_axis(self.error_rms),
+            "error_mean": _by_axis(self.error_mean),
+            "measured_range": _by_axis(self.measured_range),
+        }
+
+
+@dataclass(frozen=True)
+class Table3Metrics:
+    """Table 3: relative compensation error per pose and axis [%], published and ours.
+
+    Attributes:
+        published_per_pose: the paper's Table 3, (9, 6).
+        published_mean: its mean row, (6,).
+        paper_data_per_pose: ftcomp on the paper's data (paper method), (9, 6).
+        paper_data_mean: its mean row, (6,).
+        simulation_per_pose: ftcomp on the simulated cell (joint method), (poses, 6).
+        simulation_mean: its mean row, (6,).
+    """
+
+    published_per_pose: NDArray[np.float64] = field(repr=False)
+    published_mean: NDArray[np.float64]
+    paper_data_per_pose: NDArray[np.float64] = field(repr=False)
+    paper_data_mean: NDArray[np.float64]
+    simulation_per_pose: NDArray[np.float64] = field(repr=False)
+    simulation_mean: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for name in ("published", "paper_data", "simulation"):
+            freeze_field(self, f"{name}_per_pose")
+            freeze_field(self, f"{name}_mean", (6,))
+
+    def to_json(self) -> dict[str, Any]:
+        """The section's entry of ``metrics.json``."""
+        return {
+            "columns": list(WRENCH_COLUMNS),
+            "published": {
+                "per_pose": self.published_per_pose.tolist(),
+                "mean": self.published_mean.tolist(),
+            },
+            "paper_data": {
+                "per_pose": self.paper_data_per_pose.tolist(),
+                "mean": self.paper_data_mean.tolist(),
+            },
+            "simulation": {
+                "per_pose": np.nan_to_num(self.simulation_per_pose).tolist(),
+                "mean": self.simulation_mean.tolist(),
+            },
+        }
+
+
+@dataclass(frozen=True)
+class Table4Metrics:
+    """Table 4: the six loads weighed through compensation (Eq. 23), ours and published.
+
+    Attributes:
+        true_weight_N: the simulated loads' weights [N], (6,).
+        computed_weight_N: their weights by Eq. 23 [N], (6,).
+        relative_error_percent: 100 |computed - true| / true, (6,).
+        estimated_mass_kg: computed weight over g [kg], (6,).
+        published_true_N: the paper's true weights [N], (6,).
+        published_computed_N: the paper's computed weights [N], (6,).
+        published_relative_error_percent: the paper's relative errors [%], (6,).
+    """
+
+    true_weight_N: NDArray[np.float64]
+    computed_weight_N: NDArray[np.float64]
+    relative_error_percent: NDArray[np.float64]
+    estimated_mass_kg: NDArray[np.float64]
+    published_true_N: NDArray[np.float64]
+    published_computed_N: NDArray[np.float64]
+    published_relative_error_percent: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        for name in (
+            "true_weight_N",
+            "computed_weight_N",
+            "relative_error_percent",
+            "estimated_mass_kg",
+            "published_true_N",
+            "published_computed_N",
+            "published_relative_error_percent",
+        ):
+            freeze_field(self, name, (6,))
+
+    def to_json(self) -> dict[str, Any]:
+        """The section's entry of ``metrics.json`` (``published``: the paper's Table 4 as
+        shipped, with its note)."""
+        return {
+            "true_weight_N": self.true_weight_N.tolist(),
+            "computed_weight_N": self.computed_weight_N.tolist(),
+            "relative_error_percent": self.relative_error_percent.tolist(),
+            "estimated_mass_kg": self.estimated_mass_kg.tolist(),
+            "published": paper.PUBLISHED["table4_load_weight_N"],
+        }
 
 
 def continuous_section(
     out: Path, settings: DemoSettings, advance: Advance
-) -> tuple[dict[str, Any], Section]:
+) -> tuple[ContinuousPoseMetrics, Section]:
+    """Fig. 5 on the simulated cell: files, figure, metrics and the report section."""
     spec = paper.PUBLISHED["continuous_pose_test"]
     run = gravity.run_continuous_pose(
         samples_per_pose=max(30, settings.samples_per_pose // 5),
@@ -61,18 +198,16 @@ def continuous_section(
     )
     rms = np.sqrt(np.mean(run.error**2, axis=0))
     mean = np.mean(run.error, axis=0)
-    metrics = {
-        "load_kg": run.load_kg,
-        "from_deg": spec["from_deg"],
-        "to_deg": spec["to_deg"],
-        "duration_s": settings.continuous_duration_s,
-        "samples": len(run.t),
-        "error_rms": dict(zip(WRENCH_COLUMNS, rms.tolist(), strict=True)),
-        "error_mean": dict(zip(WRENCH_COLUMNS, mean.tolist(), strict=True)),
-        "measured_range": dict(
-            zip(WRENCH_COLUMNS, np.ptp(run.measured, axis=0).tolist(), strict=True)
-        ),
-    }
+    metrics = ContinuousPoseMetrics(
+        load_kg=run.load_kg,
+        from_deg=tuple(spec["from_deg"]),
+        to_deg=tuple(spec["to_deg"]),
+        duration_s=settings.continuous_duration_s,
+        samples=len(run.t),
+        error_rms=rms,
+        error_mean=mean,
+        measured_range=np.ptp(run.measured, axis=0),
+    )
     section = Section(
         title="2. Continuous pose change (Fig. 5)",
         anchor="continuous",
@@ -97,7 +232,8 @@ def tables_section(
     calibration: Calibration,
     paper_data: Calibration,
     advance: Advance,
-) -> tuple[dict[str, Any], dict[str, Any], Section]:
+) -> tuple[Table3Metrics, Table4Metrics, Section]:
+    """Tables 3 and 4: files, figures, metrics and the report section."""
     published = paper.PUBLISHED
     t3 = published["table3_relative_compensation_error_percent"]
     pub3 = np.array(t3["per_pose"], dtype=float)
@@ -115,18 +251,14 @@ def tables_section(
         title=fig3.title,
     )
     sim3 = calibration.relative_error_percent
-    table3 = {
-        "columns": list(WRENCH_COLUMNS),
-        "published": {"per_pose": pub3.tolist(), "mean": t3["mean"]},
-        "paper_data": {
-            "per_pose": paper_data.relative_error_percent.tolist(),
-            "mean": paper_data.relative_error_mean_percent.tolist(),
-        },
-        "simulation": {
-            "per_pose": np.nan_to_num(sim3).tolist(),
-            "mean": calibration.relative_error_mean_percent.tolist(),
-        },
-    }
+    table3 = Table3Metrics(
+        published_per_pose=pub3,
+        published_mean=np.array(t3["mean"], dtype=float),
+        paper_data_per_pose=paper_data.relative_error_percent,
+        paper_data_mean=paper_data.relative_error_mean_percent,
+        simulation_per_pose=sim3,
+        simulation_mean=calibration.relative_error_mean_percent,
+    )
     weighing = gravity.run_load_weighing(
         calibration,
         samples_per_pose=settings.weighing_samples_per_pose,
@@ -171,13 +303,15 @@ def tables_section(
             )
         ],
     )
-    table4 = {
-        "true_weight_N": weighing.true_weight_N.tolist(),
-        "computed_weight_N": weighing.computed_weight_N.tolist(),
-        "relative_error_percent": weighing.relative_error_percent.tolist(),
-        "estimated_mass_kg": weighing.estimated_mass_kg.tolist(),
-        "published": t4,
-    }
+    table4 = Table4Metrics(
+        true_weight_N=weighing.true_weight_N,
+        computed_weight_N=weighing.computed_weight_N,
+        relative_error_percent=weighing.relative_error_percent,
+        estimated_mass_kg=weighing.estimated_mass_kg,
+        published_true_N=np.array(t4["true"], dtype=float),
+        published_computed_N=np.array(t4["computed"], dtype=float),
+        published_relative_error_percent=np.array(t4["relative_error_percent"], dtype=float),
+    )
     rows3a = [
         [str(i + 1), *(f"{v:.2f}" for pair in zip(pub, ours, strict=True) for v in pair)]
         for i, (pub, ours) in enumerate(zip(pub3, paper_data.relative_error_percent, strict=True))

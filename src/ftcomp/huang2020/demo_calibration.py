@@ -7,34 +7,114 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from types import MappingProxyType
+from typing import Any
 
 from scipy.spatial.transform import Rotation
 
 from ftcomp import paper
 from ftcomp.calibration.identify import calibrate, max_deviations_in_standard_errors
-from ftcomp.calibration_record import Calibration
-from ftcomp.experiments import gravity
+from ftcomp.calibration_record import Calibration, Method
+from ftcomp.errors import ParameterError
+from ftcomp.huang2020 import gravity
+from ftcomp.huang2020.settings import Advance, DemoSettings
 from ftcomp.io.atomic import atomic_write_text
 from ftcomp.io.calibration_json import calibration_to_dict, model_to_dict, save_calibration
 from ftcomp.io.samples_csv import write_samples
 from ftcomp.io.truth_json import truth_document
 from ftcomp.model import GravityModel
-from ftcomp.report.html import Section, Table
 from ftcomp.samples import WRENCH_COLUMNS
+from ftcomp.views.html import Section, Table
 
-if TYPE_CHECKING:
-    from ftcomp.experiments.demo import DemoSettings
+__all__ = [
+    "TRUTH_HEADER",
+    "CalibrationMetrics",
+    "NoGripperWeighing",
+    "calibration_section",
+    "truth_document",
+]
 
-__all__ = ["calibration_section"]
 
-Advance = Callable[[str], None]
+@dataclass(frozen=True)
+class NoGripperWeighing:
+    """The sensing end weighed alone (the cell without its gripper) against the paper's value.
+
+    Attributes:
+        true_sensing_end_weight_N: what the cell was built with [N].
+        identified_sensing_end_weight_N: the joint-method estimate [N].
+        std_error_N: its standard error [N].
+        published_N: the paper's sensing end weight [N].
+    """
+
+    true_sensing_end_weight_N: float
+    identified_sensing_end_weight_N: float
+    std_error_N: float
+    published_N: float
+
+    def __post_init__(self) -> None:
+        if not self.std_error_N >= 0:
+            raise ParameterError(f"std_error_N must be >= 0, got {self.std_error_N}")
+
+
+@dataclass(frozen=True)
+class CalibrationMetrics:
+    """What the calibration section found.
+
+    Attributes:
+        paper_data: the paper's Tables 1-2 identified by the paper's method.
+        truth: the simulated cell's true parameters (with the gripper).
+        simulation: the simulated readings identified by each method (``paper``, ``joint``).
+        truth_error_in_standard_errors: per method, the largest |identified - true| of each
+            parameter in standard errors.
+        no_gripper: the sensing end weighed alone.
+        samples_per_pose: readings per pose in the simulation.
+    """
+
+    paper_data: Calibration = field(repr=False)
+    truth: GravityModel
+    simulation: Mapping[Method, Calibration] = field(repr=False)
+    truth_error_in_standard_errors: Mapping[Method, Mapping[str, float]]
+    no_gripper: NoGripperWeighing
+    samples_per_pose: int
+
+    def __post_init__(self) -> None:
+        if set(self.simulation) != {"paper", "joint"}:
+            raise ParameterError(
+                f"simulation needs the paper and joint methods, got {sorted(self.simulation)}"
+            )
+        object.__setattr__(self, "simulation", MappingProxyType(dict(self.simulation)))
+
+    @property
+    def joint(self) -> Calibration:
+        """The simulation's joint-method calibration (the demo compensates with it)."""
+        return self.simulation["joint"]
+
+    def to_json(self) -> dict[str, Any]:
+        """The section's entry of ``metrics.json``."""
+        bare = self.no_gripper
+        return {
+            "paper_data": calibration_to_dict(self.paper_data),
+            "simulation_truth": model_to_dict(self.truth),
+            "simulation": {m: calibration_to_dict(r) for m, r in self.simulation.items()},
+            "truth_error_in_standard_errors": {
+                str(m): dict(e) for m, e in self.truth_error_in_standard_errors.items()
+            },
+            "no_gripper": {
+                "true_sensing_end_weight_N": bare.true_sensing_end_weight_N,
+                "identified_sensing_end_weight_N": bare.identified_sensing_end_weight_N,
+                "std_error_N": bare.std_error_N,
+                "published_N": bare.published_N,
+            },
+            "samples_per_pose": self.samples_per_pose,
+        }
 
 
 def calibration_section(
     out: Path, settings: DemoSettings, advance: Advance
-) -> tuple[dict[str, Any], Section, Calibration, Calibration]:
+) -> tuple[CalibrationMetrics, Section]:
+    """Identify the paper's data and the simulated cell; write the files; the report section."""
     published = paper.PUBLISHED
     paper_data = calibrate(paper.paper_samples(), method="paper")
     save_calibration(out / "calibration_paper_data.json", paper_data)
@@ -62,22 +142,22 @@ def calibration_section(
     rows = _parameter_rows(paper_data, run.truth, run.results)
     joint = run.results["joint"]
     truth_errors = {
-        str(method): max_deviations_in_standard_errors(result, run.truth)
+        method: max_deviations_in_standard_errors(result, run.truth)
         for method, result in run.results.items()
     }
-    metrics = {
-        "paper_data": calibration_to_dict(paper_data),
-        "simulation_truth": model_to_dict(run.truth),
-        "simulation": {m: calibration_to_dict(r) for m, r in run.results.items()},
-        "truth_error_in_standard_errors": truth_errors,
-        "no_gripper": {
-            "true_sensing_end_weight_N": run.bare_truth.weight_N,
-            "identified_sensing_end_weight_N": run.bare_result.model.weight_N,
-            "std_error_N": run.bare_result.std_errors.weight_N,
-            "published_N": published["sensor_sensing_end_weight_N"],
-        },
-        "samples_per_pose": settings.samples_per_pose,
-    }
+    metrics = CalibrationMetrics(
+        paper_data=paper_data,
+        truth=run.truth,
+        simulation=run.results,
+        truth_error_in_standard_errors=truth_errors,
+        no_gripper=NoGripperWeighing(
+            true_sensing_end_weight_N=run.bare_truth.weight_N,
+            identified_sensing_end_weight_N=run.bare_result.model.weight_N,
+            std_error_N=run.bare_result.std_errors.weight_N,
+            published_N=float(published["sensor_sensing_end_weight_N"]),
+        ),
+        samples_per_pose=settings.samples_per_pose,
+    )
     section = Section(
         title="1. Calibration (paper 2.2.1, Tables 1-2)",
         anchor="calibration",
@@ -118,7 +198,7 @@ def calibration_section(
             ),
         ],
     )
-    return metrics, section, joint, paper_data
+    return metrics, section
 
 
 #: (label, unit, scale to the unit, getter) per table row; the getter reads a GravityModel or

@@ -27,7 +27,7 @@ from ftcomp.calibration.identify import calibrate
 from ftcomp.calibration_record import DynamicCalibration
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.compensation.inertial import InertialCompensator
-from ftcomp.experiments.gravity import collect_paper_poses
+from ftcomp.huang2020.gravity import collect_paper_poses
 from ftcomp.kinematics import sensor_motion
 from ftcomp.sim.cell import HOME_Q_RAD, SimCell
 from ftcomp.sim.kinematics import true_sensor_motion, true_tool_inertia

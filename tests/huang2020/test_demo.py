@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 
 from ftcomp.cli import main
-from ftcomp.experiments.demo import MARKER_FILE
 from ftcomp.session.verdicts import VERDICTS
-from report.headless_chromium import chromium_binary, measure_page
+from ftcomp.huang2020.demo import MARKER_FILE
+from views.headless_chromium import chromium_binary, measure_page
 
 
 class _Images(HTMLParser):

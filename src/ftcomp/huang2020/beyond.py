@@ -20,7 +20,7 @@ from ftcomp import paper
 from ftcomp.calibration.identify import calibrate
 from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.online import OnlineLoadCompensator
-from ftcomp.experiments.gravity import collect_paper_poses
+from ftcomp.huang2020.gravity import collect_paper_poses
 from ftcomp.sim.cell import HOME_Q_RAD, SimCell
 from ftcomp.sim.scene import SceneConfig
 from ftcomp.sim.sensor import SensorSpec

@@ -2,24 +2,26 @@
 
 Each run is set down on a fresh simulated cell with the calibration identified in the demo's
 first section, written to ``placement/<run>/`` and judged from the *true* contact force
-(:mod:`ftcomp.experiments.verdicts`); the figures draw the true force beside the sensed one.
+(:mod:`ftcomp.session.verdicts`); the figures draw the true force beside the sensed one.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import replace
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
 from ftcomp import paper
 from ftcomp.calibration_record import Calibration
+from ftcomp.errors import ParameterError
+from ftcomp.huang2020.settings import Advance, DemoSettings
 from ftcomp.io.calibration_json import model_to_dict
-from ftcomp.report.figures import plot_placement
-from ftcomp.report.html import Cell, Figure, Link, Mark, Section, Table
+from ftcomp.model import GravityModel
 from ftcomp.session.placement import (
     DEFAULT_GAINS,
     PlacementConfig,
@@ -28,19 +30,170 @@ from ftcomp.session.placement import (
     sweep_gains,
     write_placement_outputs,
 )
+from ftcomp.views.figures import plot_placement
 from ftcomp.sim.placement_cell import SimPlacementCell
+from ftcomp.views.figures import plot_placement
+from ftcomp.views.html import Cell, Figure, Link, Mark, Section, Table
 
-if TYPE_CHECKING:
-    from ftcomp.experiments.demo import DemoSettings
+__all__ = [
+    "PlacementMetrics",
+    "PlacementRun",
+    "PlacementSetup",
+    "placement_section",
+    "verdict_mark",
+]
 
-__all__ = ["placement_section", "verdict_mark"]
 
-Advance = Callable[[str], None]
+def _optional(value: Any) -> float | None:
+    return None if value is None else float(value)
 
 
-def verdict_mark(metrics: dict[str, Any]) -> Mark:
+@dataclass(frozen=True)
+class PlacementRun:
+    """One placement run of the demo, with what the comparisons and tables read of it.
+
+    Attributes:
+        name: the run's name (its folder under ``placement/``).
+        label: how the report names it.
+        result: the run itself (settings, timeseries and every metric, as written to its
+            ``metrics.json``).
+        verdict: from the true contact (``placed gently``, ``pressed``, ``stopped``).
+        verdict_reason: why, in words.
+        stop_reason: what ended the run.
+        placed: whether the controller decided the load was placed.
+        true_press_N: surface force beyond the load's weight at the decision [N].
+        final_force_N: the sensed force along gravity at the end [N].
+        peak_press_N: the largest true press [N].
+        load_weight_N: the load's weight [N].
+        settle_time_s: time of the placement decision [s] (None: not placed).
+        contact_stiffness_N_per_mm: measured in contact [N/mm] (None: too little contact).
+        force_ripple_N: RMS of the filtered force about its 1 Hz trend in contact [N].
+        k1_mm_per_N, k2_mm_per_s_per_N: the run's gains [mm/N], [mm/(s*N)].
+        descent_mm: descent at the decision [mm]; max_velocity_mm_s: fastest descent [mm/s].
+    """
+
+    name: str
+    label: str
+    result: PlacementResult = field(repr=False)
+    verdict: str
+    verdict_reason: str
+    stop_reason: str
+    placed: bool
+    true_press_N: float
+    final_force_N: float
+    peak_press_N: float
+    load_weight_N: float
+    settle_time_s: float | None
+    contact_stiffness_N_per_mm: float | None
+    force_ripple_N: float
+    k1_mm_per_N: float
+    k2_mm_per_s_per_N: float
+    descent_mm: float
+    max_velocity_mm_s: float
+
+    def __post_init__(self) -> None:
+        if not self.name:
+            raise ParameterError("a placement run needs a name")
+
+    @classmethod
+    def of(cls, name: str, label: str, result: PlacementResult) -> PlacementRun:
+        """The run ``result`` under ``name``, its metrics read once."""
+        m = result.metrics
+        return cls(
+            name=name,
+            label=label,
+            result=result,
+            verdict=str(m["verdict"]),
+            verdict_reason=str(m["verdict_reason"]),
+            stop_reason=str(m["stop_reason"]),
+            placed=bool(m["placed"]),
+            true_press_N=float(m["true_press_N"]),
+            final_force_N=float(m["final_force_N"]),
+            peak_press_N=float(m["peak_press_N"]),
+            load_weight_N=float(m["load_weight_N"]),
+            settle_time_s=_optional(m["settle_time_s"]),
+            contact_stiffness_N_per_mm=_optional(m["contact_stiffness_N_per_mm"]),
+            force_ripple_N=float(m["force_ripple_N"]),
+            k1_mm_per_N=float(m["k1_mm_per_N"]),
+            k2_mm_per_s_per_N=float(m["k2_mm_per_s_per_N"]),
+            descent_mm=float(m["descent_mm"]),
+            max_velocity_mm_s=float(m["max_velocity_mm_s"]),
+        )
+
+
+@dataclass(frozen=True)
+class PlacementSetup:
+    """What every placement run shares.
+
+    Attributes:
+        load_kg: the load [kg].
+        approach_gap_m: gap between load and surface at the start [m].
+        position_depth_m: how far below the surface's top position-only control descends [m].
+        max_force_N: the force limit that stops a run [N].
+        band_N: the band the filtered force settles in to count as placed [N].
+        gentle_press_N: the largest true press still judged gentle [N].
+    """
+
+    load_kg: float
+    approach_gap_m: float
+    position_depth_m: float
+    max_force_N: float
+    band_N: float
+    gentle_press_N: float
+
+    def __post_init__(self) -> None:
+        if not self.load_kg > 0:
+            raise ParameterError(f"load_kg must be > 0, got {self.load_kg}")
+
+    def to_json(self) -> dict[str, Any]:
+        """The setup as ``metrics.json`` shows it (lengths in mm)."""
+        return {
+            "load_kg": self.load_kg,
+            "approach_gap_mm": self.approach_gap_m * 1e3,
+            "position_depth_mm": self.position_depth_m * 1e3,
+            "max_force_N": self.max_force_N,
+            "band_N": self.band_N,
+            "gentle_press_N": self.gentle_press_N,
+        }
+
+
+@dataclass(frozen=True)
+class PlacementMetrics:
+    """The placement section's runs, judged from the true contact.
+
+    Attributes:
+        runs: every run by name, in the order they ran.
+        k13_sweep: names of the K1 sweep's runs, K1 rising.
+        k23_sweep: names of the K2 sweep's runs, K2 rising.
+        calibration_used: the model every run compensated with.
+        setup: what every run shares.
+    """
+
+    runs: Mapping[str, PlacementRun]
+    k13_sweep: tuple[str, ...]
+    k23_sweep: tuple[str, ...]
+    calibration_used: GravityModel
+    setup: PlacementSetup
+
+    def __post_init__(self) -> None:
+        unknown = [n for n in (*self.k13_sweep, *self.k23_sweep) if n not in self.runs]
+        if unknown:
+            raise ParameterError(f"sweep runs {unknown} are not among the runs")
+        object.__setattr__(self, "runs", MappingProxyType(dict(self.runs)))
+
+    def to_json(self) -> dict[str, Any]:
+        """The section's entry of ``metrics.json``: each run's metrics under its name, then the
+        published values, the calibration used, the sweeps and the setup."""
+        out: dict[str, Any] = {name: dict(r.result.metrics) for name, r in self.runs.items()}
+        out["published"] = paper.PUBLISHED["placement_test"]
+        out["calibration_used"] = model_to_dict(self.calibration_used)
+        out["sweeps"] = {"k13": list(self.k13_sweep), "k23": list(self.k23_sweep)}
+        out["setup"] = self.setup.to_json()
+        return out
+
+
+def verdict_mark(verdict: str) -> Mark:
     """A run's verdict as a report cell: green when placed gently, red otherwise."""
-    verdict = str(metrics.get("verdict", "?"))
     return Mark(verdict, "good" if verdict == "placed gently" else "bad")
 
 
@@ -56,7 +209,7 @@ def _vec(v: np.ndarray, digits: int = 4) -> str:
 
 def placement_section(
     out: Path, settings: DemoSettings, calibration: Calibration, advance: Advance
-) -> tuple[dict[str, Any], Section]:
+) -> tuple[PlacementMetrics, Section]:
     """Every placement run compensates with ``calibration``, identified on the simulated cell."""
     published = paper.PUBLISHED["placement_test"]
     k13 = float(published["k13_fixed_mm_per_N"])
@@ -67,14 +220,12 @@ def placement_section(
     k23 = sponge_k2 * 1e3
     model = calibration.model
     seeds = iter(range(settings.seed + 300, settings.seed + 400))
-    runs: dict[str, PlacementResult] = {}
-    labels: dict[str, str] = {}
+    runs: dict[str, PlacementRun] = {}
 
     def keep(name: str, label: str, result: PlacementResult) -> None:
-        runs[name], labels[name] = result, label
-        title = f"{label}: {result.metrics['verdict']}"
+        run = runs[name] = PlacementRun.of(name, label, result)
         write_placement_outputs(result, out / "placement" / name)
-        plot_placement([result], out / "placement" / name / "placement.png", title=title)
+        plot_placement([result], out / "placement" / name / "placement.png", title=f"{label}: {run.verdict}")
         advance(f"placement {name}")
 
     plan: list[tuple[str, str, PlacementConfig, str]] = [
@@ -145,42 +296,44 @@ def placement_section(
     ]
     for figure, (names, legend) in zip(figures, groups, strict=True):
         plot_placement(
-            [runs[n] for n in names], out / figure.path, labels=legend, title=figure.title
+            [runs[n].result for n in names], out / figure.path, labels=legend, title=figure.title
         )
 
     default = PlacementConfig(control="position")
-    metrics: dict[str, Any] = {name: dict(r.metrics) for name, r in runs.items()}
-    metrics["published"] = published
-    metrics["calibration_used"] = model_to_dict(model)
-    metrics["sweeps"] = {"k13": k13_names, "k23": k23_names}
-    metrics["setup"] = {
-        "load_kg": 0.5,
-        "approach_gap_mm": default.approach_gap_m * 1e3,
-        "position_depth_mm": default.position_depth_m * 1e3,
-        "max_force_N": default.max_force_N,
-        "band_N": default.band_N,
-        "gentle_press_N": default.gentle_press_N,
-    }
+    metrics = PlacementMetrics(
+        runs=runs,
+        k13_sweep=tuple(k13_names),
+        k23_sweep=tuple(k23_names),
+        calibration_used=model,
+        setup=PlacementSetup(
+            load_kg=0.5,
+            approach_gap_m=default.approach_gap_m,
+            position_depth_m=default.position_depth_m,
+            max_force_N=default.max_force_N,
+            band_N=default.band_N,
+            gentle_press_N=default.gentle_press_N,
+        ),
+    )
     section = Section(
         title="4. Compliant placement (paper 2.2.2, Fig. 6 and 7)",
         anchor="placement",
         paragraphs=_paragraphs(runs, published, default, model, (book_k1, book_k2), k23),
-        tables=[_runs_table(runs, labels)],
+        tables=[_runs_table(runs)],
         figures=figures,
     )
     return metrics, section
 
 
 def _paragraphs(
-    runs: dict[str, PlacementResult],
-    published: dict[str, Any],
+    runs: Mapping[str, PlacementRun],
+    published: Mapping[str, Any],
     default: PlacementConfig,
-    model: Any,
+    model: GravityModel,
     book_gains: tuple[float, float],
     k23: float,
 ) -> list[str]:
     sponge_k1, sponge_k2 = DEFAULT_GAINS["sponge"]
-    unc = runs["admittance_uncompensated_sponge"].metrics
+    unc = runs["admittance_uncompensated_sponge"]
     return [
         f"A 500 g load is held {default.approach_gap_m * 1e3:g} mm above a sponge (a spring) or "
         "a book (stiff) and set down. Position-only control descends at constant speed to "
@@ -200,8 +353,8 @@ def _paragraphs(
         "surface).",
         "Without compensation the controller settles its raw force at 0 N, which it reaches "
         "only when the surface carries the tool's weight and the sensor's bias as well as the "
-        f"load: the load is {unc['verdict']}, {unc['true_press_N']:+.2f} N beyond its weight, "
-        f"while the sensed force reads {unc['final_force_N']:+.3f} N. Fig. 7's dashed lines "
+        f"load: the load is {unc.verdict}, {unc.true_press_N:+.2f} N beyond its weight, "
+        f"while the sensed force reads {unc.final_force_N:+.3f} N. Fig. 7's dashed lines "
         "show the truth.",
         f"Gains: sponge k13 = {sponge_k1 * 1e3:g} mm/N, k23 = {sponge_k2 * 1e3:g} mm/(s·N); "
         f"book k13 = {book_gains[0] * 1e3:g}, k23 = {book_gains[1] * 1e3:g}. The book's "
@@ -219,23 +372,21 @@ def _paragraphs(
     ]
 
 
-def _runs_table(runs: dict[str, PlacementResult], labels: dict[str, str]) -> Table:
-    rows: list[list[Cell]] = []
-    for name, result in runs.items():
-        m = result.metrics
-        rows.append(
-            [
-                Link(labels[name], f"placement/{name}/placement.png"),
-                verdict_mark(m),
-                _num(m.get("true_press_N")),
-                _num(m.get("final_force_N")),
-                _num(m.get("peak_press_N")),
-                _num(m.get("settle_time_s"), 2),
-                _num(m.get("descent_mm"), 2),
-                _num(m.get("max_velocity_mm_s"), 1),
-                str(m.get("stop_reason", "")).replace("_", " "),
-            ]
-        )
+def _runs_table(runs: Mapping[str, PlacementRun]) -> Table:
+    rows: list[list[Cell]] = [
+        [
+            Link(run.label, f"placement/{name}/placement.png"),
+            verdict_mark(run.verdict),
+            _num(run.true_press_N),
+            _num(run.final_force_N),
+            _num(run.peak_press_N),
+            _num(run.settle_time_s, 2),
+            _num(run.descent_mm, 2),
+            _num(run.max_velocity_mm_s, 1),
+            run.stop_reason.replace("_", " "),
+        ]
+        for name, run in runs.items()
+    ]
     return Table(
         "Placement runs",
         [

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ftcomp.errors import ParameterError
-from ftcomp.experiments.drift_sim import (
+from ftcomp.huang2020.drift_sim import (
     DriftFits,
     DriftSetup,
     RebiasComparison,

@@ -1,49 +1,26 @@
-"""The demo's figures (matplotlib, Agg backend, PNG): one function per figure of the paper.
+"""The paper's figures and the "beyond the paper" ones, drawn on :mod:`ftcomp.views.figures`.
 
-Every figure takes its title from the caller, who shows the same words as the caption in the
-report, and keeps its legend outside the axes so no legend hides data.
+One function per figure; each takes the numbers it draws and its title (the report shows the
+same words as the caption).
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.lines import Line2D
 from numpy.typing import NDArray
-from scipy.ndimage import uniform_filter1d
 
-if TYPE_CHECKING:
-    from ftcomp.session.placement import PlacementResult
+from ftcomp.views.figures import WRENCH_AXIS_LABELS, moving_mean, new_figure, save_figure
 
 __all__ = [
-    "TRUE_FORCE_LABEL",
     "plot_continuous_pose",
     "plot_fast_move",
     "plot_online_load",
-    "plot_placement",
     "plot_table3",
     "plot_table4",
 ]
-
-_AXES = ("fx [N]", "fy [N]", "fz [N]", "tx [N·m]", "ty [N·m]", "tz [N·m]")
-
-#: Readings per moving mean of the sensed force when several runs share a plot (10 ms at 1 kHz).
-_MEAN_READINGS = 10
-
-#: What the dashed line of a placement plot shows, on the same axis and sign as the sensed force.
-TRUE_FORCE_LABEL = "true: load weight − surface force"
-
-
-def _save(fig: Any, path: str | os.PathLike[str], dpi: int = 110) -> None:
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
 
 
 def plot_continuous_pose(
@@ -56,20 +33,21 @@ def plot_continuous_pose(
     title: str,
 ) -> None:
     """Fig. 5: measured value, compensation value (drawn negated, as the paper) and error."""
-    fig, axes = plt.subplots(2, 3, figsize=(12, 6.8), sharex=True, layout="constrained")
+    fig = new_figure(12, 6.8)
+    axes = fig.subplots(2, 3, sharex=True)
     for k, ax in enumerate(axes.ravel()):
         ax.plot(t, measured[:, k], lw=0.8, label="measured")
         ax.plot(t, -compensation[:, k], lw=1.2, label="− compensation value")
         ax.plot(t, error[:, k], lw=0.8, label="error (measured − compensation value)")
         ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_title(_AXES[k])
+        ax.set_title(WRENCH_AXIS_LABELS[k])
         ax.grid(alpha=0.3)
         if k >= 3:
             ax.set_xlabel("t [s]")
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=9)
     fig.suptitle(title)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def plot_table3(
@@ -81,13 +59,14 @@ def plot_table3(
     title: str,
 ) -> None:
     """Table 3 as grouped bars: relative compensation error per pose and axis, per source."""
-    fig, axes = plt.subplots(2, 3, figsize=(12, 6.8), sharex=True, layout="constrained")
+    fig = new_figure(12, 6.8)
+    axes = fig.subplots(2, 3, sharex=True)
     poses = np.arange(1, ours.shape[0] + 1)
     width = 0.4
     for k, ax in enumerate(axes.ravel()):
         ax.bar(poses - width / 2, published[:, k], width, label=labels[0])
         ax.bar(poses + width / 2, ours[:, k], width, label=labels[1])
-        ax.set_title(_AXES[k].split()[0])
+        ax.set_title(WRENCH_AXIS_LABELS[k].split()[0])
         ax.set_ylabel("relative error [%]")
         ax.set_xticks(poses)
         ax.grid(alpha=0.3, axis="y")
@@ -96,7 +75,7 @@ def plot_table3(
     handles, names = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, names, loc="outside lower center", ncol=2, fontsize=9)
     fig.suptitle(title)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def plot_table4(
@@ -109,7 +88,8 @@ def plot_table4(
     title: str,
 ) -> None:
     """Table 4: computed against true load weight, simulation and paper, with relative errors."""
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.6), layout="constrained")
+    fig = new_figure(11, 4.6)
+    ax1, ax2 = fig.subplots(1, 2)
     ax1.plot(published_true_N, published_computed_N, "o", label="paper (real sensor)")
     ax1.plot(true_N, computed_N, "s", mfc="none", label="ftcomp (simulated cell)")
     lim = [0.0, float(max(true_N.max(), published_computed_N.max())) * 1.08]
@@ -132,74 +112,7 @@ def plot_table4(
     handles, names = ax1.get_legend_handles_labels()
     fig.legend(handles, names, loc="outside lower center", ncol=3, fontsize=9)
     fig.suptitle(title)
-    _save(fig, path)
-
-
-def plot_placement(
-    results: Sequence[PlacementResult],
-    path: str | os.PathLike[str],
-    *,
-    labels: Sequence[str] | None = None,
-    title: str = "",
-) -> None:
-    """Force, displacement and velocity over time (the paper's Fig. 6/7), one colour per run.
-
-    The force panel has, per run, the sensed force along gravity (one run alone: every reading
-    and the filtered force the placement decides on; several runs: each a 10-reading moving
-    mean) and, dashed in the same colour, the
-    true force on the same axis and sign: load weight − surface force (+ while the load hangs,
-    0 when the surface carries exactly its weight, − when pressed into the surface).
-    """
-    fig, axes = plt.subplots(3, 1, figsize=(7.5, 8.2), sharex=True, layout="constrained")
-    handles: list[Any] = []
-    for i, result in enumerate(results):
-        s, config = result.timeseries, result.config
-        sensed = "compensated" if config.compensation else "raw (no compensation)"
-        name = labels[i] if labels is not None else ""
-        color = f"C{i}"
-        if len(results) == 1:
-            (each,) = axes[0].plot(
-                s["t_s"], s["force_compensated_N"], lw=0.4, alpha=0.45, color=color
-            )
-            each.set_label(f"sensed, {sensed}, each reading")
-            handles.append(each)
-        if len(results) == 1:
-            (line,) = axes[0].plot(s["t_s"], s["force_filtered_N"], lw=1.8, color=color)
-            line.set_label(
-                f"sensed, {sensed}, filtered ({config.decision_cutoff_hz:g} Hz: the placement "
-                "decision)"
-            )
-        else:  # several runs: readings averaged over 10 ms (no lag worth showing)
-            mean = uniform_filter1d(s["force_compensated_N"], _MEAN_READINGS, mode="nearest")
-            (line,) = axes[0].plot(s["t_s"], mean, lw=1.5, color=color)
-            line.set_label(f"{name}: sensed, {sensed}")
-        (true,) = axes[0].plot(
-            s["t_s"],
-            result.metrics["load_weight_N"] - s["force_true_contact_N"],
-            "--",
-            lw=1.2,
-            color=color,
-        )
-        true.set_label(f"{name}: {TRUE_FORCE_LABEL}" if name else TRUE_FORCE_LABEL)
-        handles += [line, true]
-        axes[1].plot(s["t_s"], s["displacement_mm"], color=color)
-        axes[2].plot(s["t_s"], s["velocity_mm_s"], color=color)
-    band = results[0].config.band_N if results else 0.05
-    axes[0].axhspan(-band, band, color="green", alpha=0.2)
-    handles.append(
-        Line2D([], [], color="green", alpha=0.4, lw=6, label=f"±{band:g} N: the placement band")
-    )
-    axes[0].axhline(0.0, color="k", lw=0.5)
-    axes[0].set_ylabel("force along gravity [N]")
-    axes[1].set_ylabel("descent [mm]")
-    axes[2].set_ylabel("velocity, down [mm/s]")
-    axes[2].set_xlabel("time [s]")
-    for ax in axes:
-        ax.grid(alpha=0.3)
-    fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize=7.5)
-    if title:
-        fig.suptitle(title)
-    _save(fig, path, dpi=100)
+    save_figure(fig, path)
 
 
 def plot_online_load(
@@ -217,7 +130,8 @@ def plot_online_load(
 ) -> None:
     """Beyond the paper: an online load estimate (mass +- sigma, centre of gravity) over time,
     and the compensated force, with the detected grasp and release marked."""
-    fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True, layout="constrained")
+    fig = new_figure(10, 8)
+    axes = fig.subplots(3, 1, sharex=True)
     ax = axes[0]
     ax.plot(t, mass_kg * 1e3, lw=1.0, label="estimate")
     ax.fill_between(
@@ -247,7 +161,7 @@ def plot_online_load(
         ax.grid(alpha=0.3)
         ax.legend(loc="center left", bbox_to_anchor=(1.0, 0.5), fontsize=8)
     fig.suptitle(title)
-    _save(fig, path)
+    save_figure(fig, path)
 
 
 def plot_fast_move(
@@ -260,20 +174,20 @@ def plot_fast_move(
 ) -> None:
     """Beyond the paper: the contact-free compensated force of a fast move, static-only and
     with inertial compensation (thin: every reading; thick: 10 ms moving mean)."""
-    fig, axes = plt.subplots(3, 1, figsize=(10, 7), sharex=True, layout="constrained")
+    fig = new_figure(10, 7)
+    axes = fig.subplots(3, 1, sharex=True)
     for k, ax in enumerate(axes):
         for force, label, color in (
             (static_force_N, "static only", "C3"),
             (inertial_force_N, "static + inertial", "C0"),
         ):
             ax.plot(t, force[:, k], lw=0.3, color=color, alpha=0.35)
-            mean = uniform_filter1d(force[:, k], _MEAN_READINGS, mode="nearest")
-            ax.plot(t, mean, lw=1.2, color=color, label=label)
+            ax.plot(t, moving_mean(force[:, k]), lw=1.2, color=color, label=label)
         ax.axhline(0.0, color="k", lw=0.5)
-        ax.set_ylabel(_AXES[k])
+        ax.set_ylabel(WRENCH_AXIS_LABELS[k])
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("t [s]")
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=9)
     fig.suptitle(title)
-    _save(fig, path)
+    save_figure(fig, path)

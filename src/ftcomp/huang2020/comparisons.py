@@ -1,6 +1,6 @@
 """Every published result of the paper beside ours, judged, with the reason where they differ.
 
-:func:`compare_with_paper` reads the demo's metrics (``metrics.json``) and returns one
+:func:`compare_with_paper` reads the demo's metrics records and returns one
 :class:`Comparison` per published quantity. Whether a quantity is reproduced is computed from
 the numbers, never written down: a parameter agrees when it matches to the printed digits (one
 unit of the last digit for rounding), a simulated estimate when it lies within 3 standard errors
@@ -11,12 +11,16 @@ The terminal summary (``ftcomp demo``) and the report show the same list.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from itertools import pairwise
 from typing import Any
 
 from ftcomp import paper
+from ftcomp.errors import ParameterError
+from ftcomp.huang2020.demo_calibration import CalibrationMetrics
+from ftcomp.huang2020.demo_gravity import Table3Metrics, Table4Metrics
+from ftcomp.huang2020.demo_placement import PlacementMetrics, PlacementRun, PlacementSetup
 
 __all__ = ["Comparison", "compare_with_paper", "comparison_rows"]
 
@@ -41,6 +45,10 @@ class Comparison:
     ours: str
     reproduced: bool
     note: str
+
+    def __post_init__(self) -> None:
+        if not (self.section and self.quantity and self.paper and self.ours and self.note):
+            raise ParameterError(f"a comparison needs every text filled in, got {self!r}")
 
 
 def _decimals(values: Sequence[float]) -> int:
@@ -70,21 +78,22 @@ def _pm(value: float, se: float | None, digits: int) -> str:
     return f"{value:.{digits}f} ± {se:.{digits}f}"
 
 
-def _calibration(cal: dict[str, Any], published: dict[str, Any]) -> list[Comparison]:
-    data, se = cal["paper_data"], cal["paper_data"]["std_errors"]
+def _calibration(cal: CalibrationMetrics, published: Mapping[str, Any]) -> list[Comparison]:
+    data, se = cal.paper_data.model, cal.paper_data.std_errors
     rows = []
-    ok, how = _digits_agree([data["tool_weight_N"]], [published["tool_weight_N"]])
+    ok, how = _digits_agree([data.weight_N], [published["tool_weight_N"]])
     rows.append(
         Comparison(
             "calibration",
             "tool weight G [N] (the paper's data, paper method)",
             f"{published['tool_weight_N']}",
-            _pm(data["tool_weight_N"], se["tool_weight_N"], 4),
+            _pm(data.weight_N, se.weight_N, 4),
             ok,
             how,
         )
     )
-    tilt, tilt_se = data["base_tilt_deg"], se["base_tilt_deg"]
+    tilt = {"U": math.degrees(data.tilt_U_rad), "V": math.degrees(data.tilt_V_rad)}
+    tilt_se = {"U": math.degrees(se.tilt_U_rad), "V": math.degrees(se.tilt_V_rad)}
     pub_tilt = published["base_tilt_deg"]
     ok, how = _digits_agree([tilt["U"], tilt["V"]], [pub_tilt["U"], pub_tilt["V"]])
     hidden = [k for k in ("U", "V") if abs(tilt[k]) < (tilt_se[k] or 0.0)]
@@ -103,41 +112,42 @@ def _calibration(cal: dict[str, Any], published: dict[str, Any]) -> list[Compari
             how,
         )
     )
-    for key, label in (
-        ("force_bias_N", "force bias F0 [N]"),
-        ("torque_bias_Nm", "torque bias M0 [N·m]"),
-        ("center_of_gravity_m", "centre of gravity P [m]"),
+    for key, label, ours in (
+        ("force_bias_N", "force bias F0 [N]", data.force_bias_N),
+        ("torque_bias_Nm", "torque bias M0 [N·m]", data.torque_bias_Nm),
+        ("center_of_gravity_m", "centre of gravity P [m]", data.center_of_gravity_m),
     ):
-        ok, how = _digits_agree(data[key], published[key])
+        values = ours.tolist()
+        ok, how = _digits_agree(values, published[key])
         rows.append(
             Comparison(
                 "calibration",
                 label,
                 _vec(published[key], _decimals(published[key])),
-                _vec(data[key], _decimals(published[key])),
+                _vec(values, _decimals(published[key])),
                 ok,
                 how,
             )
         )
-    bare = cal["no_gripper"]
-    deviation = abs(bare["identified_sensing_end_weight_N"] - bare["published_N"])
-    within = deviation <= 3 * bare["std_error_N"]
+    bare = cal.no_gripper
+    deviation = abs(bare.identified_sensing_end_weight_N - bare.published_N)
+    within = deviation <= 3 * bare.std_error_N
     rows.append(
         Comparison(
             "calibration",
             "sensing end weight [N] (simulated cell, no gripper)",
-            f"{bare['published_N']}",
-            _pm(bare["identified_sensing_end_weight_N"], bare["std_error_N"], 4),
+            f"{bare.published_N}",
+            _pm(bare.identified_sensing_end_weight_N, bare.std_error_N, 4),
             within,
             f"the cell is built with the paper's value; identified within "
-            f"{deviation / bare['std_error_N']:.1f} standard errors (3 allowed)",
+            f"{deviation / bare.std_error_N:.1f} standard errors (3 allowed)",
         )
     )
     return rows
 
 
-def _tables(table3: dict[str, Any], table4: dict[str, Any]) -> list[Comparison]:
-    pub3, ours3 = table3["published"]["mean"], table3["paper_data"]["mean"]
+def _tables(table3: Table3Metrics, table4: Table4Metrics) -> list[Comparison]:
+    pub3, ours3 = table3.published_mean.tolist(), table3.paper_data_mean.tolist()
     worst3 = max(abs(a - b) for a, b in zip(pub3, ours3, strict=True))
     rows = [
         Comparison(
@@ -150,7 +160,8 @@ def _tables(table3: dict[str, Any], table4: dict[str, Any]) -> list[Comparison]:
             "the rounding of Table 2's four-decimal torques (docs/calibration.md)",
         )
     ]
-    pub4, ours4 = table4["published"]["relative_error_percent"], table4["relative_error_percent"]
+    pub4 = table4.published_relative_error_percent.tolist()
+    ours4 = table4.relative_error_percent.tolist()
     worst4 = max(abs(a - b) for a, b in zip(pub4, ours4, strict=True))
     reproduced = worst4 <= 1.0
     rows.append(
@@ -169,18 +180,17 @@ def _tables(table3: dict[str, Any], table4: dict[str, Any]) -> list[Comparison]:
     return rows
 
 
-def _position(run: dict[str, Any], surface: str, pub: float, setup: dict[str, Any]) -> Comparison:
-    ours = run["final_force_N"]
-    ours = math.nan if ours is None else float(ours)  # None: not finite in metrics.json
-    stiffness = run.get("contact_stiffness_N_per_mm")
-    depth = setup["position_depth_mm"]
-    reproduced = run["verdict"] != "stopped" and abs(ours - pub) <= 0.2 * abs(pub)
-    text = f"{ours:+.3f} ({run['verdict']}, true press {run['true_press_N']:+.3f} N)"
+def _position(run: PlacementRun, surface: str, pub: float, setup: PlacementSetup) -> Comparison:
+    ours = run.final_force_N
+    stiffness = run.contact_stiffness_N_per_mm
+    depth = setup.position_depth_m * 1e3
+    reproduced = run.verdict != "stopped" and abs(ours - pub) <= 0.2 * abs(pub)
+    text = f"{ours:+.3f} ({run.verdict}, true press {run.true_press_N:+.3f} N)"
     if reproduced:
         note = "within 20 %"
-    elif run["verdict"] == "stopped":
+    elif run.verdict == "stopped":
         note = (
-            f"stopped by the {run['stop_reason'].replace('_', ' ')} ({setup['max_force_N']:g} "
+            f"stopped by the {run.stop_reason.replace('_', ' ')} ({setup.max_force_N:g} "
             f"N): the descent target lies {depth:g} mm below the {surface}'s top"
         )
         if stiffness:
@@ -197,7 +207,7 @@ def _position(run: dict[str, Any], surface: str, pub: float, setup: dict[str, An
         if stiffness:
             note += (
                 f" and the {surface}'s stiffness ({stiffness:.2f} N/mm, measured): the load's "
-                f"weight alone takes {run['load_weight_N'] / stiffness:.1f} mm of it"
+                f"weight alone takes {run.load_weight_N / stiffness:.1f} mm of it"
             )
         note += "; the paper gives neither"
     return Comparison(
@@ -210,43 +220,43 @@ def _decreasing(values: Sequence[float | None]) -> bool:
     return len(known) == len(values) >= 2 and all(b < a for a, b in pairwise(known))
 
 
-def _placement(place: dict[str, Any]) -> list[Comparison]:
-    published, setup = place["published"], place["setup"]
+def _placement(place: PlacementMetrics, published: Mapping[str, Any]) -> list[Comparison]:
+    runs, setup = place.runs, place.setup
     band = published["stop_band_N"]
     rows = [
-        _position(place[f"position_{s}"], s, published["position_only_final_force_N"][s], setup)
+        _position(runs[f"position_{s}"], s, published["position_only_final_force_N"][s], setup)
         for s in ("sponge", "book")
     ]
     for surface in ("sponge", "book"):
-        run = place[f"admittance_{surface}"]
-        ok = run["verdict"] == "placed gently" and abs(run["final_force_N"]) <= band
+        run = runs[f"admittance_{surface}"]
+        ok = run.verdict == "placed gently" and abs(run.final_force_N) <= band
         rows.append(
             Comparison(
                 "placement",
                 f"admittance, compensated, {surface}",
                 f"placed, sensed force within ±{band} N",
-                f"{run['verdict']}: sensed {run['final_force_N']:+.3f} N, true press "
-                f"{run['true_press_N']:+.3f} N",
+                f"{run.verdict}: sensed {run.final_force_N:+.3f} N, true press "
+                f"{run.true_press_N:+.3f} N",
                 ok,
-                run["verdict_reason"],
+                run.verdict_reason,
             )
         )
-    unc = place["admittance_uncompensated_sponge"]
+    unc = runs["admittance_uncompensated_sponge"]
     rows.append(
         Comparison(
             "placement",
             "admittance without compensation, sponge",
             "the decision goes wrong: the load is pressed",
-            f"{unc['verdict']}: true press {unc['true_press_N']:+.3f} N while the sensed (raw) "
-            f"force reads {unc['final_force_N']:+.3f} N",
-            unc["verdict"] == "pressed",
+            f"{unc.verdict}: true press {unc.true_press_N:+.3f} N while the sensed (raw) "
+            f"force reads {unc.final_force_N:+.3f} N",
+            unc.verdict == "pressed",
             "the tool's weight and the bias stay in the signal, so the controller pushes until "
             "the surface carries them too",
         )
     )
-    k13 = [place[name] for name in place["sweeps"]["k13"]]
-    times = [r.get("settle_time_s") for r in k13]
-    values = [r["k1_mm_per_N"] for r in k13]
+    k13 = [runs[name] for name in place.k13_sweep]
+    times = [r.settle_time_s for r in k13]
+    values = [r.k1_mm_per_N for r in k13]
     ok = _decreasing(times)
     rows.append(
         Comparison(
@@ -262,10 +272,10 @@ def _placement(place: dict[str, Any]) -> list[Comparison]:
             "velocity ripple (docs/control.md)",
         )
     )
-    k23 = [place[name] for name in place["sweeps"]["k23"]]
-    times = [r.get("settle_time_s") for r in k23]
-    ripple = [r.get("force_ripple_N", math.nan) for r in k23]
-    values = [r["k2_mm_per_s_per_N"] for r in k23]
+    k23 = [runs[name] for name in place.k23_sweep]
+    times = [r.settle_time_s for r in k23]
+    ripple = [r.force_ripple_N for r in k23]
+    values = [r.k2_mm_per_s_per_N for r in k23]
     ok = _decreasing(times) and all(b > a for a, b in pairwise(ripple))
     rows.append(
         Comparison(
@@ -289,13 +299,18 @@ def _s(t: float | None) -> str:
     return "not placed" if t is None else f"{t:.2f} s"
 
 
-def compare_with_paper(metrics: dict[str, Any]) -> list[Comparison]:
-    """Every published quantity beside ours, from the demo's JSON-ready metrics."""
+def compare_with_paper(
+    calibration: CalibrationMetrics,
+    table3: Table3Metrics,
+    table4: Table4Metrics,
+    placement: PlacementMetrics,
+) -> list[Comparison]:
+    """Every published quantity beside ours, from the demo's sections' records."""
     published = paper.PUBLISHED
     return [
-        *_calibration(metrics["calibration"], published),
-        *_tables(metrics["table3"], metrics["table4"]),
-        *_placement(metrics["placement"]),
+        *_calibration(calibration, published),
+        *_tables(table3, table4),
+        *_placement(placement, published["placement_test"]),
     ]
 
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ftcomp.experiments.beyond import run_grasp_during_move, run_motion_without_grasp
-from ftcomp.experiments.beyond_inertial import run_fast_move
+from ftcomp.huang2020.beyond import run_grasp_during_move, run_motion_without_grasp
+from ftcomp.huang2020.beyond_inertial import run_fast_move
 
 
 def test_a_load_grasped_during_a_slow_move_is_weighed_within_one_second() -> None:

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from ftcomp.report.html import Figure, Link, Mark, Section, Table, render_report, write_report
-from report.headless_chromium import chromium_binary, measure_page
+from ftcomp.views.html import Figure, Link, Mark, Section, Table, render_report, write_report
+from views.headless_chromium import chromium_binary, measure_page
 
 
 def test_text_is_escaped_and_cells_keep_their_kind() -> None:

@@ -6,7 +6,7 @@
   (Fig. 5): measured wrench, compensation value and error over time.
 - :func:`run_load_weighing`: the six loads of Table 4 weighed through compensation (Eq. 23).
 
-Each returns a frozen dataclass of numbers and arrays; :mod:`ftcomp.experiments.demo` turns them
+Each returns a frozen dataclass of numbers and arrays; :mod:`ftcomp.huang2020.demo` turns them
 into files, figures and the report.
 """
 
