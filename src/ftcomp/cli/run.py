@@ -131,8 +131,13 @@ def _check(args: argparse.Namespace) -> None:
 def _controller(args: argparse.Namespace, period_s: float) -> AdmittanceController:
     from ftcomp.control.controller import AdmittanceController
     from ftcomp.control.filters import LowPassFilter
-    from ftcomp.control.laws import CombinedLaw, PositionLaw, VelocityLaw, selection_matrix
-    from ftcomp.control.mass_damper_spring import MassDamperSpringLaw
+    from ftcomp.control.laws import (
+        CombinedLaw,
+        MassDamperSpringLaw,
+        PositionLaw,
+        VelocityLaw,
+        selection_matrix,
+    )
     from ftcomp.control.safety import SafetyLimits
 
     S = selection_matrix(args.axes)
