@@ -16,6 +16,8 @@ pose           ``robot.pose()`` and ``Mount.sensor_pose`` (a mount with an offse
 compensate     ``GravityCompensator.compensate`` and the cycle's ``Reading`` record
 step           ``AdmittanceController.step`` (combined law on z, 20 Hz low-pass, base frame,
                the raw reading passed for the frozen-value and range checks)
+settle         the settle rule of ``ftcomp run``: the error the step acted on through a 2 Hz
+               first-order low-pass (``LowPassFilter.step`` on 6 channels), its z within a band
 log            one row of ``ftcomp run``'s columns: ``format_row`` and a ``csv.writer`` on
                ``/dev/null``
 command        ``ControlCycle.command``: ``Mount.tcp_twist`` and ``robot.command_twist``
@@ -51,7 +53,7 @@ from typing import Any
 
 import numpy as np
 
-PARTS = ("read", "pose", "compensate", "step", "log", "command")
+PARTS = ("read", "pose", "compensate", "step", "settle", "log", "command")
 DT = 1e-3
 REPO = Path(__file__).resolve().parent.parent
 
@@ -185,10 +187,12 @@ class _Run:
     """One tree's cycle, run block by block over the ramp (rewound, bumpless, at its end)."""
 
     def __init__(self, ramp_cycles: int) -> None:
+        from ftcomp.control import LowPassFilter
         from ftcomp.control.loop import Reading
         from ftcomp.io.numtext import format_row
 
         self.cycle, self.controller = _setup(ramp_cycles)
+        self.settle_filter = LowPassFilter(2.0, DT, order=1, channels=6)
         self.ramp_cycles = ramp_cycles
         self.reading, self.format_row = Reading, format_row
         self.sink = open(os.devnull, "w", newline="")  # noqa: SIM115 (closed with the process)
@@ -198,7 +202,9 @@ class _Run:
     def _restart(self) -> None:
         self.cycle.sensor.rewind()
         first = self.cycle.read()
-        self.state = self.controller.initial_state(first.wrench_contact_sensor, first.R_base_sensor)
+        w0, R0 = first.wrench_contact_sensor, first.R_base_sensor
+        self.state = self.controller.initial_state(w0, R0)
+        self.settle_state = self.settle_filter.initial_state(self.controller.wrench_error(w0, R0))
         self.t0_ns, self.left = first.now_ns, self.ramp_cycles
 
     def _next(self) -> None:
@@ -208,6 +214,13 @@ class _Run:
         if self.left == 0:
             self._restart()
         self.left -= 1
+
+    def _settled(self) -> bool:
+        """The settle rule's cycle: filter the error the step acted on, check its z (0.5 N)."""
+        self.settle_state, error = self.settle_filter.step(
+            self.settle_state, self.state.law.wrench_error
+        )
+        return bool(abs(error[2]) <= 0.5)
 
     def _log(self, r: Any, twist: Any) -> None:
         self.writer.writerow(self.format_row(_row(self.t0_ns, r, self.state, twist)))
@@ -232,11 +245,13 @@ class _Run:
             d = clock()
             self.state, twist = _step(controller, self.state, r)
             e = clock()
-            self._log(r, twist)
+            self._settled()
             f = clock()
-            cycle.command(twist, r)
+            self._log(r, twist)
             g = clock()
-            times.append([b - a, c - b, d - c, e - d, f - e, g - f])
+            cycle.command(twist, r)
+            h = clock()
+            times.append([b - a, c - b, d - c, e - d, f - e, g - f, h - g])
             twists.append(twist.tolist())
         return times, twists
 
@@ -249,6 +264,7 @@ class _Run:
             a = clock()
             r = cycle.read()
             self.state, twist = _step(controller, self.state, r)
+            self._settled()
             self._log(r, twist)
             cycle.command(twist, r)
             times.append(clock() - a)
