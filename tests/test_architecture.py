@@ -35,11 +35,12 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "ftcomp"
 #: Module prefix -> layer, bottom (1) to top. A module is in the layer of its longest prefix;
 #: the facade ``ftcomp`` (the package's ``__init__``) is matched by its own name only.
 LAYERS: dict[str, int] = {
-    # 1. base: errors, constants, arrays, frames, the model, samples, kinematics, records
+    # 1. base: errors, constants, arrays, frames, the model, samples, kinematics, records, extras
     "ftcomp.arrays": 1,
     "ftcomp.calibration_record": 1,
     "ftcomp.constants": 1,
     "ftcomp.errors": 1,
+    "ftcomp.extras": 1,
     "ftcomp.frames": 1,
     "ftcomp.kinematics": 1,
     "ftcomp.model": 1,
@@ -66,29 +67,6 @@ LAYERS: dict[str, int] = {
     "ftcomp.cli": 8,
     "ftcomp.huang2020": 8,
 }
-
-#: Findings in the real tree outside calibration, io and compensation, while other work is under
-#: way; emptied at integration. The test also fails when one of these no longer occurs, so the
-#: list only shrinks.
-KNOWN_VIOLATIONS: frozenset[str] = frozenset(
-    {
-        "private: ftcomp.control.controller imports ftcomp.control.laws._RateGains",
-        "private: ftcomp.control.controller imports ftcomp.control.laws._rate_gains_of",
-        "private: ftcomp.control.controller imports ftcomp.control.laws._rate_step",
-        "private: ftcomp.control.controller imports ftcomp.control.safety._check_sample",
-        "private: ftcomp.control.controller imports ftcomp.control.safety._check_travel",
-        "private: ftcomp.control.controller imports ftcomp.control.safety._check_wrench",
-        "private: ftcomp.control.controller imports ftcomp.control.safety._limit_twist",
-        "private: ftcomp.control.controller imports ftcomp.control.safety._saturated",
-        "private: ftcomp.control.mass_damper_spring imports ftcomp.control.laws._check_dt",
-        "private: ftcomp.control.mass_damper_spring imports ftcomp.control.laws._diagonal",
-        "private: ftcomp.control.mass_damper_spring imports ftcomp.control.laws._frozen_diag",
-        "private: ftcomp.control.mass_damper_spring imports ftcomp.control.laws._frozen_selection",
-        "private: ftcomp.control.mass_damper_spring imports ftcomp.control.laws._rest_state",
-        "private: ftcomp.control.mass_damper_spring imports ftcomp.control.laws._vector6",
-    }
-)
-
 
 @dataclass(frozen=True)
 class Import:
@@ -292,12 +270,8 @@ def real_findings() -> set[str]:
 
 @pytest.mark.parametrize("kind", ["upward", "unplaced", "private", "cycle", "all"])
 def test_the_library_keeps_its_layers(kind: str, real_findings: set[str]) -> None:
-    found = {f for f in real_findings if f.startswith(kind + ":")}
-    known = {f for f in KNOWN_VIOLATIONS if f.startswith(kind + ":")}
-    assert not found - known, "\n".join(sorted(found - known))
-    assert not known - found, "fixed, remove from KNOWN_VIOLATIONS:\n" + "\n".join(
-        sorted(known - found)
-    )
+    found = sorted(f for f in real_findings if f.startswith(kind + ":"))
+    assert not found, "\n".join(found)
 
 
 def test_io_and_compensation_use_calibration_records_without_importing_calibration() -> None:

@@ -270,6 +270,23 @@ def test_no_fault_step_equals_sosfilt_and_the_law_written_out(
     assert np.ptp(np.array(got["twist_base"])[:, 2]) > 0  # the command did move
 
 
+@pytest.mark.parametrize("law_name", list(_LAWS))
+def test_the_state_holds_the_filtered_error_the_law_acted_on(law_name: str) -> None:
+    ctrl = AdmittanceController(_LAWS[law_name], LowPassFilter(30.0, DT), LIMITS, "base")
+    rng = np.random.default_rng(12)
+    R = Rotation.random(rng=rng).as_matrix()
+    state = ctrl.initial_state(LOAD_SENSOR, R)
+    law_state = state.law
+    for k in range(50):
+        w = LOAD_SENSOR + rng.normal(scale=0.3, size=6)
+        state, _ = ctrl.step(state, k * DT, w, R, k * DT, DT)
+        e = state.law.wrench_error
+        np.testing.assert_array_equal(e, ctrl.wrench_error(state.wrench_filtered_sensor, R))
+        law_state, twist_law = ctrl.law.step(law_state, e, DT)  # the logged error, replayed
+        np.testing.assert_array_equal(twist_law, state.law.twist)
+    assert state.stop_reason is None
+
+
 def _faulty_log(
     fault: str, n: int, rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:

@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 from ftcomp.cli import main
-from ftcomp.session.verdicts import VERDICTS
 from ftcomp.huang2020.demo import MARKER_FILE
+from ftcomp.session.verdicts import VERDICTS
 from views.headless_chromium import chromium_binary, measure_page
 
 

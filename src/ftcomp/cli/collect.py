@@ -133,7 +133,6 @@ def run(args: argparse.Namespace) -> int:
     """``record`` on ``sim://``: open the cell by URI, record through the protocols, write the
     samples and the truth."""
     from ftcomp.hardware.registry import open_robot, open_sensor
-    from ftcomp.huang2020.demo_calibration import TRUTH_HEADER
     from ftcomp.io.poses_csv import read_pose_file
     from ftcomp.io.truth_json import TRUTH_HEADER
     from ftcomp.paper import paper_poses

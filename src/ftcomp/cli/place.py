@@ -106,7 +106,6 @@ def register(p: argparse.ArgumentParser) -> None:
 def _run(args: argparse.Namespace) -> int:
     from ftcomp.io.atomic import prepare_output_dir
     from ftcomp.io.calibration_json import load_calibration, save_calibration
-    from ftcomp.views.figures import plot_placement
     from ftcomp.session.placement import (
         DEFAULT_GAINS,
         PlacementConfig,
@@ -114,6 +113,7 @@ def _run(args: argparse.Namespace) -> int:
         write_placement_outputs,
     )
     from ftcomp.sim.placement_cell import SimPlacementCell
+    from ftcomp.views.figures import plot_placement
 
     if args.control == "position" and (args.k1 is not None or args.k2 is not None):
         raise ParameterError(

@@ -12,15 +12,16 @@ from ftcomp.control.laws import (
     AdmittanceLaw,
     CombinedLaw,
     LawState,
+    MassDamperSpringLaw,
     PositionLaw,
     VelocityLaw,
     selection_matrix,
 )
-from ftcomp.control.mass_damper_spring import MassDamperSpringLaw
 from ftcomp.control.safety import (
     SafetyLimits,
     StopReason,
     WatchdogState,
+    check_range,
     check_sample,
     check_travel,
     check_wrench,
@@ -41,6 +42,7 @@ __all__ = [
     "StopReason",
     "VelocityLaw",
     "WatchdogState",
+    "check_range",
     "check_sample",
     "check_travel",
     "check_wrench",

@@ -15,44 +15,38 @@ The step is a pure function of ``(state, inputs)``: it neither reads a clock nor
 robot, so it replays a recorded log exactly. A stop latches: every later step returns a zero twist
 and the same ``stop_reason``.
 
-The step is the 1 kHz path of every loop, so it is lean: the constants (gains with S folded in,
-limits, filter coefficients, ``wrench_desired``) are prepared as floats in ``__post_init__``; a
-step converts its inputs to Python floats once, computes on floats written out per axis (a numpy
-operation on six numbers costs about a microsecond, a float operation a few tens of nanoseconds)
-and puts the arrays of the new state in one new buffer. It never writes into the state it was
-given. ``bench/bench_control.py`` times it against the straightforward numpy version.
+**The error the law acted on is part of the state.** After ``state, twist = controller.step(...)``,
+``state.law.wrench_error`` is the filtered wrench error ΔF in the control frame that the law turned
+into ``twist`` (for every law). A log that records it needs no second computation of the error,
+and replaying the log through the step reproduces the commands.
+
+The step is the 1 kHz path of every loop, written plainly: each law, filter and safety check is
+called through its one public implementation (:mod:`ftcomp.control.laws`,
+:mod:`ftcomp.control.filters`, :mod:`ftcomp.control.safety`) on (6,) arrays; it never writes into
+the state it was given. ``bench/bench_cycle.py`` shows what it costs within a whole cycle.
 """
 
 from __future__ import annotations
 
-import functools
 import math
-import struct
-from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal, NamedTuple
+from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.arrays import frozen_array
 from ftcomp.control.filters import LowPassFilter
-from ftcomp.control.laws import (
-    AdmittanceLaw,
-    LawState,
-    _rate_gains_of,
-    _rate_step,
-    _RateGains,
-)
+from ftcomp.control.laws import AdmittanceLaw, LawState
 from ftcomp.control.safety import (
     SafetyLimits,
     StopReason,
     WatchdogState,
-    _check_sample,
-    _check_travel,
-    _check_wrench,
-    _limit_twist,
-    _saturated,
+    check_range,
+    check_sample,
+    check_travel,
+    check_wrench,
+    limit_twist,
 )
 from ftcomp.errors import ParameterError
 
@@ -65,7 +59,10 @@ class ControllerState(NamedTuple):
     """Everything the controller carries from one period to the next.
 
     Attributes:
-        law: the law's state (offset, twist and wrench error in the control frame).
+        law: the law's state in the control frame: ``law.wrench_error`` is the filtered wrench
+            error [N, N*m] the law acted on, the one that produced the twist returned with this
+            state (see the module docstring; a period that stops returns a zero twist whatever
+            it holds); also ``law.offset`` and ``law.twist``.
         filter: the low-pass filter's state.
         watchdog: last sample stamp and repeat count.
         wrench_filtered_sensor: last filtered contact wrench [N, N*m], sensor frame, (6,).
@@ -83,32 +80,22 @@ class ControllerState(NamedTuple):
     stop_reason: StopReason | None
 
 
-def _floats(value: ArrayLike, shape: tuple[int, ...], name: str) -> list[Any]:
-    """``value`` as (nested) lists of Python floats, after checking its shape."""
+def _array(value: ArrayLike, shape: tuple[int, ...], name: str) -> NDArray[np.float64]:
+    """``value`` as a float array (not copied if it is one), after checking its shape."""
     arr = np.asarray(value, dtype=float)
     if arr.shape != shape:
         raise ParameterError(f"{name} must have shape {shape}, got {arr.shape}")
-    return arr.tolist()
+    return arr
 
 
-@functools.cache
-def _packer(n_floats: int) -> Callable[..., bytes]:
-    """``pack(*floats) -> bytes`` of ``n_floats`` doubles (kept here: a Struct does not pickle)."""
-    return struct.Struct(f"{n_floats}d").pack
+def _all_finite(arr: NDArray[np.float64]) -> bool:
+    """Whether every value is finite (on a few values, cheaper than ``np.isfinite().all()``)."""
+    return all(map(math.isfinite, arr.ravel().tolist()))
 
 
-def _rotate6(R: Sequence[Sequence[float]], v: Sequence[float]) -> list[float]:
-    """``[R @ v[:3], R @ v[3:]]`` on floats, R as three rows."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
-    f0, f1, f2, m0, m1, m2 = v
-    return [
-        r00 * f0 + r01 * f1 + r02 * f2,
-        r10 * f0 + r11 * f1 + r12 * f2,
-        r20 * f0 + r21 * f1 + r22 * f2,
-        r00 * m0 + r01 * m1 + r02 * m2,
-        r10 * m0 + r11 * m1 + r12 * m2,
-        r20 * m0 + r21 * m1 + r22 * m2,
-    ]
+def _rotate6(R: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``[R @ v[:3], R @ v[3:]]``: a wrench or twist rotated by R, shape (6,)."""
+    return (v.reshape(2, 3) @ R.T).ravel()
 
 
 @dataclass(frozen=True)
@@ -116,9 +103,7 @@ class AdmittanceController:
     """Admittance law + wrench filter + safety envelope.
 
     Attributes:
-        law: any :class:`~ftcomp.control.laws.AdmittanceLaw`. :class:`CombinedLaw`,
-            :class:`PositionLaw` and :class:`VelocityLaw` are stepped on floats, any other law
-            through its own ``step``.
+        law: any :class:`~ftcomp.control.laws.AdmittanceLaw`, stepped through its ``step``.
         wrench_filter: low-pass on the contact wrench (its ``period_s`` should be the control
             period), or None for no filtering.
         limits: the safety envelope (base-frame axes).
@@ -131,11 +116,6 @@ class AdmittanceController:
     limits: SafetyLimits
     frame: ControlFrame
     wrench_desired: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
-    # Prepared in __post_init__ for the step: (S K1, S K2) as floats or None, F0 as floats,
-    # and the size of the new state's buffer (see ``step``).
-    _rate_gains: _RateGains | None = field(init=False, repr=False, compare=False)
-    _wrench_desired: tuple[float, ...] = field(init=False, repr=False, compare=False)
-    _n_floats: int = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if self.frame not in ("base", "sensor"):
@@ -143,31 +123,29 @@ class AdmittanceController:
         w = np.array(self.wrench_desired, dtype=float)
         if w.shape != (6,) or not np.all(np.isfinite(w)):
             raise ParameterError(f"wrench_desired must be 6 finite values, got {w.tolist()}")
-        w = frozen_array(w, (6,), name="wrench_desired")
-        object.__setattr__(self, "wrench_desired", w)
-        object.__setattr__(self, "_wrench_desired", tuple(w.tolist()))
+        object.__setattr__(self, "wrench_desired", frozen_array(w, (6,), name="wrench_desired"))
         if self.wrench_filter is not None and self.wrench_filter.channels != 6:
             raise ParameterError("wrench_filter must filter 6 channels")
-        gains = _rate_gains_of(self.law)
-        object.__setattr__(self, "_rate_gains", gains)
-        n_floats = 18 + (18 if gains is not None else 0)
-        if self.wrench_filter is not None:
-            n_floats += 12 * len(self.wrench_filter.sos)
-        object.__setattr__(self, "_n_floats", n_floats)
-
-    def _wrench_error(self, w_sensor: Sequence[float], R: Sequence[Sequence[float]]) -> list[float]:
-        """ΔF on floats: ``w_sensor`` rotated to the control frame minus ``wrench_desired``."""
-        w0, w1, w2, w3, w4, w5 = _rotate6(R, w_sensor) if self.frame == "base" else w_sensor
-        d0, d1, d2, d3, d4, d5 = self._wrench_desired
-        return [w0 - d0, w1 - d1, w2 - d2, w3 - d3, w4 - d4, w5 - d5]
 
     def wrench_error(
         self, wrench_sensor: ArrayLike, R_base_sensor: ArrayLike
     ) -> NDArray[np.float64]:
-        """ΔF = wrench (rotated to the control frame) - wrench_desired, shape (6,)."""
-        w = _floats(wrench_sensor, (6,), "wrench_sensor")
-        R = _floats(R_base_sensor, (3, 3), "R_base_sensor")
-        return np.array(self._wrench_error(w, R))
+        """ΔF = wrench (rotated to the control frame) - wrench_desired, shape (6,).
+
+        Args:
+            wrench_sensor: a wrench [N, N*m], sensor frame, shape (6,).
+            R_base_sensor: the sensor's orientation, shape (3, 3).
+
+        Returns:
+            ΔF [N, N*m], control frame. The step computes the error it acts on with this method
+            (on the filtered wrench) and keeps it in ``state.law.wrench_error``.
+        """
+        w = _array(wrench_sensor, (6,), "wrench_sensor")
+        return self._error(w, _array(R_base_sensor, (3, 3), "R_base_sensor"))
+
+    def _error(self, w: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]:
+        """:meth:`wrench_error` of arrays whose shapes are checked."""
+        return (_rotate6(R, w) if self.frame == "base" else w) - self.wrench_desired
 
     def initial_state(
         self, wrench_contact_sensor: ArrayLike, R_base_sensor: ArrayLike
@@ -263,72 +241,50 @@ class AdmittanceController:
     ) -> tuple[ControllerState, NDArray[np.float64]]:
         """:meth:`step` once the latch is checked; may raise on inputs of the wrong type."""
         limits = self.limits
-        w = _floats(wrench_contact_sensor, (6,), "wrench_contact_sensor")
-        raw = None if wrench_raw_sensor is None else _floats(wrench_raw_sensor, (6,), "raw")
+        w = _array(wrench_contact_sensor, (6,), "wrench_contact_sensor")
+        raw = None if wrench_raw_sensor is None else _array(wrench_raw_sensor, (6,), "raw")
         watched = w if raw is None else raw
-        watchdog, reason = _check_sample(limits, state.watchdog, float(t_sample), watched, now)
-        if reason is None and raw is not None and not all(map(math.isfinite, w)):
-            reason = StopReason.NON_FINITE_SAMPLE
-        if reason is None and raw is not None and _saturated(limits, raw):
-            reason = StopReason.SENSOR_SATURATED
+        watchdog, reason = check_sample(limits, state.watchdog, float(t_sample), watched, now)
+        if reason is None and raw is not None:
+            # The watchdog saw the raw reading, not the compensated one.
+            reason = check_range(limits, raw) if _all_finite(w) else StopReason.NON_FINITE_SAMPLE
         if reason is None:
-            reason = _check_wrench(limits, w)
+            reason = check_wrench(limits, w)
         if reason is None and not (dt > 0.0 and math.isfinite(dt)):
             reason = StopReason.INVALID_INPUT
         if reason is not None:
             return self._stopped(state, watchdog, reason), np.zeros(6)
-        R = _floats(R_base_sensor, (3, 3), "R_base_sensor")
+        R = _array(R_base_sensor, (3, 3), "R_base_sensor")
         nominal = (
             None
             if twist_nominal_base is None
-            else _floats(twist_nominal_base, (6,), "twist_nominal_base")
+            else _array(twist_nominal_base, (6,), "twist_nominal_base")
         )
-        if not math.isfinite(sum(R[0]) + sum(R[1]) + sum(R[2])) or (
-            nominal is not None and not math.isfinite(sum(nominal))
-        ):
+        if not _all_finite(R) or (nominal is not None and not _all_finite(nominal)):
             return self._stopped(state, watchdog, StopReason.NON_FINITE_POSE), np.zeros(6)
         if watchdog.repeats > 0:  # tolerated repeat: nothing new to filter, hold the command
             return state._replace(watchdog=watchdog), state.twist_base
         if self.wrench_filter is not None:
-            zi, w_filt = self.wrench_filter._step6(state.filter.tolist(), w)
+            zi, w_filt = self.wrench_filter.step(state.filter, w)
         else:
-            zi, w_filt = [], w
-        e = self._wrench_error(w_filt, R)
-        law_state: LawState | None = None
-        if self._rate_gains is not None:
-            law = state.law
-            offset, twist = _rate_step(
-                self._rate_gains, law.offset.tolist(), law.wrench_error.tolist(), e, dt
-            )
-            law_rows = [*offset, *twist, *e]
-        else:  # another law: its own step, on arrays
-            law_state, twist_array = self.law.step(state.law, np.array(e), dt)
-            twist, law_rows = twist_array.tolist(), []
+            zi, w_filt = state.filter, w.copy()  # the state keeps no array of the caller's
+        e = self._error(w_filt, R)
+        law_state, twist = self.law.step(state.law, e, dt)
         twist_base = twist if self.frame == "base" else _rotate6(R, twist)
         if nominal is not None:
-            v0, v1, v2, v3, v4, v5 = twist_base
-            n0, n1, n2, n3, n4, n5 = nominal
-            twist_base = [v0 + n0, v1 + n1, v2 + n2, v3 + n3, v4 + n4, v5 + n5]
-        twist_base = _limit_twist(limits, twist_base, state.twist_base.tolist(), dt)
-        if not math.isfinite(sum(twist_base)):  # the last guard: never command a NaN
+            twist_base = twist_base + nominal
+        twist_base = limit_twist(limits, twist_base, state.twist_base, dt)
+        if not _all_finite(twist_base):  # the last guard: never command a NaN
             return self._stopped(state, watchdog, StopReason.NON_FINITE_COMMAND), np.zeros(6)
-        travel, reason = _check_travel(limits, state.travel_base.tolist(), twist_base, dt)
-        # The new state's arrays are slices of one new buffer: one allocation instead of seven
-        # (np.array on six floats costs about as much as packing them all). The layout:
-        # w_filt, twist_base, travel, [the law's offset, twist, e], [the filter's state].
-        pack = _packer(self._n_floats)
-        buf = np.frombuffer(bytearray(pack(*w_filt, *twist_base, *travel, *law_rows, *zi)))
-        if law_state is None:
-            law_state = LawState(buf[18:24], buf[24:30], buf[30:36])
-        zi_new = buf[len(buf) - len(zi) :].reshape(state.filter.shape)
+        travel, reason = check_travel(limits, state.travel_base, twist_base, dt)
         if reason is not None:
             stopped = ControllerState(
-                law_state, zi_new, watchdog, buf[0:6], np.zeros(6), state.travel_base, reason
+                law_state, zi, watchdog, w_filt, np.zeros(6), state.travel_base, reason
             )
             return stopped, np.zeros(6)
-        twist_out = buf[6:12]
-        new = ControllerState(law_state, zi_new, watchdog, buf[0:6], twist_out, buf[12:18], None)
-        return new, twist_out
+        return ControllerState(
+            law_state, zi, watchdog, w_filt, twist_base, travel, None
+        ), twist_base
 
     @staticmethod
     def _stopped(

@@ -7,18 +7,18 @@ state layout of :func:`scipy.signal.sosfilt_zi`), over all channels at once.
 The derivative the combined law needs (dΔF/dt) is then a backward difference of the *filtered*
 signal, which this filter's roll-off keeps from amplifying sensor noise.
 
-A filter of a few channels is cheaper on Python floats than as numpy arrays (a numpy operation on
-six numbers costs about a microsecond, a float operation a few tens of nanoseconds): ``step``
-runs :meth:`LowPassFilter.step_scalar` on each channel, and the controller uses a six-channel
-kernel written out per channel. A scalar signal in a 1 kHz loop (the placement's decision
-filter) should call ``step_scalar`` itself: its state is a tuple of floats, its input and output
-a float, and it allocates no array (about 20 times cheaper than ``step`` on one channel).
+One kernel steps the sections (:func:`_sections_step`); its arithmetic is the same on a numpy
+array of channels (:meth:`LowPassFilter.step`, the controller's wrench) and on one Python float
+(:meth:`LowPassFilter.step_scalar`, for a scalar signal in a 1 kHz loop such as the placement's
+decision filter: no array is allocated, a few times cheaper than ``step`` on one channel).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from itertools import chain
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -30,8 +30,33 @@ __all__ = ["LowPassFilter"]
 
 # One second-order section as floats: (b0, b1, b2, a1, a2); a0 is 1 (butter normalises it).
 _Section = tuple[float, float, float, float, float]
-# A state as nested lists, the layout of ``NDArray.tolist()``: [section][0 or 1][channel].
-_ListState = list[list[list[float]]]
+# A signal: one float, or a numpy array of channels (the arithmetic is the same on both).
+_Signal = TypeVar("_Signal", float, NDArray[np.float64])
+
+
+def _sections_step(
+    sections: Sequence[Sequence[_Signal]], state: Iterable[Sequence[_Signal]], x: _Signal
+) -> tuple[list[tuple[_Signal, _Signal]], _Signal]:
+    """One sample through the second-order sections, as :func:`scipy.signal.sosfilt` computes it
+    (transposed direct form II).
+
+    Args:
+        sections: ``(b0, b1, b2, a1, a2)`` per section: floats for a float signal; for an array
+            of channels, each coefficient repeated per channel (numpy multiplies two arrays
+            faster than an array and a float; the products are the same).
+        state: ``(z0, z1)`` per section, each a float or an array of channels like ``x``.
+        x: the sample.
+
+    Returns:
+        The new ``(z0, z1)`` per section and the filtered sample.
+    """
+    y = x
+    new = []
+    for (b0, b1, b2, a1, a2), (z0, z1) in zip(sections, state, strict=True):
+        out = y * b0 + z0
+        new.append((y * b1 - out * a1 + z1, y * b2 - out * a2))
+        y = out
+    return new, y
 
 
 @dataclass(frozen=True)
@@ -52,6 +77,9 @@ class LowPassFilter:
     channels: int = 6
     sos: NDArray[np.float64] = field(init=False, repr=False)
     _sections: tuple[_Section, ...] = field(init=False, repr=False, compare=False)
+    _sections_per_channel: tuple[tuple[NDArray[np.float64], ...], ...] = field(
+        init=False, repr=False, compare=False
+    )
     _zi: NDArray[np.float64] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -77,6 +105,8 @@ class LowPassFilter:
         object.__setattr__(self, "sos", sos)
         sections = tuple((b0, b1, b2, a1, a2) for b0, b1, b2, _a0, a1, a2 in sos.tolist())
         object.__setattr__(self, "_sections", sections)
+        per_channel = tuple(tuple(np.full(self.channels, c) for c in sec) for sec in sections)
+        object.__setattr__(self, "_sections_per_channel", per_channel)
         zi = np.asarray(signal.sosfilt_zi(sos), dtype=float)
         zi.setflags(write=False)
         object.__setattr__(self, "_zi", zi)
@@ -107,14 +137,8 @@ class LowPassFilter:
             raise ParameterError(
                 f"filter state must have shape ({n}, 2, {self.channels}), got {z.shape}"
             )
-        # One flat scalar state per channel (the layout of step_scalar), stepped one by one.
-        columns = z.reshape(2 * n, self.channels).T.tolist()
-        new, y = [], []
-        for column, x_channel in zip(columns, self._input(x).tolist(), strict=True):
-            z_channel, y_channel = self.step_scalar(column, x_channel)
-            new.append(z_channel)
-            y.append(y_channel)
-        return np.array(new).T.reshape(z.shape), np.array(y)
+        new, y = _sections_step(self._sections_per_channel, z, self._input(x))
+        return np.array(new), y
 
     def initial_state_scalar(self, x0: float) -> tuple[float, ...]:
         """:meth:`initial_state` of a one-channel filter as a flat tuple of floats.
@@ -147,51 +171,9 @@ class LowPassFilter:
             raise ParameterError(
                 f"filter state must hold {2 * len(self._sections)} floats, got {len(state)}"
             )
-        y = x
-        new: tuple[float, ...] = ()
-        i = 0
-        for b0, b1, b2, a1, a2 in self._sections:
-            out = b0 * y + state[i]
-            new += (b1 * y - a1 * out + state[i + 1], b2 * y - a2 * out)
-            y = out
-            i += 2
-        return new, y
-
-    def _step6(self, state: _ListState, x: Sequence[float]) -> tuple[list[float], list[float]]:
-        """:meth:`step` of a six-channel filter on floats (the controller's kernel).
-
-        Args:
-            state: ``state.tolist()`` of a (n_sections, 2, 6) state.
-            x: six floats.
-
-        Returns:
-            The new state as ``12 * n_sections`` floats in the (n_sections, 2, 6) order, and the
-            six outputs. The arithmetic of :meth:`step_scalar`, written out per channel.
-        """
-        y0, y1, y2, y3, y4, y5 = x
-        new: list[float] = []
-        # Not strict: a state of the wrong size makes the controller's buffer the wrong size.
-        for (b0, b1, b2, a1, a2), (z0, z1) in zip(self._sections, state, strict=False):
-            p0, p1, p2, p3, p4, p5 = z0
-            q0, q1, q2, q3, q4, q5 = z1
-            o0, o1, o2 = b0 * y0 + p0, b0 * y1 + p1, b0 * y2 + p2
-            o3, o4, o5 = b0 * y3 + p3, b0 * y4 + p4, b0 * y5 + p5
-            new += (
-                b1 * y0 - a1 * o0 + q0,
-                b1 * y1 - a1 * o1 + q1,
-                b1 * y2 - a1 * o2 + q2,
-                b1 * y3 - a1 * o3 + q3,
-                b1 * y4 - a1 * o4 + q4,
-                b1 * y5 - a1 * o5 + q5,
-                b2 * y0 - a2 * o0,
-                b2 * y1 - a2 * o1,
-                b2 * y2 - a2 * o2,
-                b2 * y3 - a2 * o3,
-                b2 * y4 - a2 * o4,
-                b2 * y5 - a2 * o5,
-            )
-            y0, y1, y2, y3, y4, y5 = o0, o1, o2, o3, o4, o5
-        return new, [y0, y1, y2, y3, y4, y5]
+        pairs = zip(state[0::2], state[1::2], strict=True)
+        new, y = _sections_step(self._sections, pairs, float(x))
+        return tuple(chain.from_iterable(new)), y
 
     def _input(self, x: ArrayLike) -> NDArray[np.float64]:
         arr = np.asarray(x, dtype=float)

@@ -17,8 +17,10 @@ with 0 get zero twist.
 
 Each law is a frozen dataclass holding its gains; ``initial_state`` and ``step(state,
 wrench_error, dt)`` are pure (no clock, no I/O), so the same law runs in the simulator, on a robot
-and over a recorded log. Every law returns the same :class:`LawState`, whose ``offset`` is the
-displacement the law has commanded so far (ΔX, [m, rad], control frame).
+and over a recorded log. Every law returns the same :class:`LawState`: ``offset`` is the
+displacement the law has commanded so far (ΔX, [m, rad], control frame) and ``wrench_error`` the
+input the last step acted on, so a state always says which error produced its ``twist``. Each
+law has one implementation, its ``step`` on (6,) arrays, which the controller calls.
 
 Laws:
 
@@ -28,8 +30,8 @@ Laws:
 - :class:`VelocityLaw` (Eq. 25): ΔV = S K2 ΔF.
 - :class:`CombinedLaw` (Eq. 26-27): ΔV = S (K1 dΔF/dt + K2 ΔF), the derivative a backward
   difference of the input (give it a filtered wrench error, see :mod:`ftcomp.control.filters`).
-- :class:`~ftcomp.control.mass_damper_spring.MassDamperSpringLaw`: M x'' + D x' + K x = S ΔF per
-  axis, integrated with semi-implicit Euler as ros2_controllers' ``admittance_controller`` does.
+- :class:`MassDamperSpringLaw`: M x'' + D x' + K x = S ΔF per axis, integrated with
+  semi-implicit Euler as ros2_controllers' ``admittance_controller`` does.
 
 Units: K1 [m/N] (rad/(N*m) on rotation axes), K2 [m/(s*N)], M [kg], D [N*s/m], K [N/m]
 (rotational analogues on axes 3-5). The paper quotes k13 in mm/N and k23 in mm/(s*N): convert at
@@ -38,7 +40,6 @@ the edges (``k1_mm_per_N * 1e-3``).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple, Protocol
 
@@ -52,6 +53,7 @@ __all__ = [
     "AdmittanceLaw",
     "CombinedLaw",
     "LawState",
+    "MassDamperSpringLaw",
     "PositionLaw",
     "VelocityLaw",
     "selection_matrix",
@@ -66,8 +68,10 @@ class LawState(NamedTuple):
 
     Attributes:
         offset: displacement commanded so far, ΔX [m, rad], control frame, shape (6,).
-        twist: last twist command [m/s, rad/s], control frame, shape (6,).
-        wrench_error: last wrench error input [N, N*m], control frame, shape (6,).
+        twist: the twist the last step returned [m/s, rad/s], control frame, shape (6,).
+        wrench_error: the wrench error ΔF the last step acted on, the one that produced
+            ``twist`` [N, N*m], control frame, shape (6,) (in :meth:`AdmittanceLaw.initial_state`,
+            the error to start from). In a controller's state this is the *filtered* error.
     """
 
     offset: NDArray[np.float64]
@@ -178,74 +182,30 @@ def _rest_state(wrench_error: ArrayLike | None) -> LawState:
     return LawState(np.zeros(6), np.zeros(6), _vector6(wrench_error))
 
 
-def _combined_step(
-    k1: NDArray[np.float64],
-    k2: NDArray[np.float64],
-    s: NDArray[np.float64],
-    state: LawState,
-    wrench_error: ArrayLike,
-    dt: float,
+# (S K1, S K2): the gains of Eq. 24-27 with the selection folded in, prepared once per law.
+_SelectedGains = tuple[NDArray[np.float64], NDArray[np.float64]]
+
+
+def _selected_gains(
+    k1: NDArray[np.float64], k2: NDArray[np.float64], selection: NDArray[np.float64]
+) -> _SelectedGains:
+    s = _diagonal(selection)
+    return frozen_array(s * k1, (6,), name="S K1"), frozen_array(s * k2, (6,), name="S K2")
+
+
+def _rate_law_step(
+    gains: _SelectedGains, state: LawState, wrench_error: ArrayLike, dt: float
 ) -> tuple[LawState, NDArray[np.float64]]:
+    """The one step of Eq. 24-27: ``twist = S K1 (ΔF - ΔF_prev) / dt + S K2 ΔF``.
+
+    S is 0 or 1 per axis, so ``(S K1) x`` is ``S (K1 x)``: this is Eq. 26-27 as written, with
+    K2 = 0 for the position law (Eq. 24, incremental) and K1 = 0 for the velocity law (Eq. 25).
+    """
     _check_dt(dt)
     e = _vector6(wrench_error)
-    twist = s * (k1 * ((e - state.wrench_error) / dt) + k2 * e)
+    sk1, sk2 = gains
+    twist = sk1 * ((e - state.wrench_error) / dt) + sk2 * e
     return LawState(state.offset + twist * dt, twist, e), twist
-
-
-# The Eq. 24-27 laws on floats, for the controller's 1 kHz step (package-internal): with S folded
-# into the gains, ``twist_i = SK1_i * (e_i - e_prev_i) / dt + SK2_i * e_i``; S is 0 or 1, so this
-# is the same arithmetic as ``_combined_step`` on selected axes and 0 on the others.
-_RateGains = tuple[tuple[float, ...], tuple[float, ...]]
-
-
-def _rate_gains(
-    k1: NDArray[np.float64], k2: NDArray[np.float64], s: NDArray[np.float64]
-) -> _RateGains:
-    return tuple((s * k1).tolist()), tuple((s * k2).tolist())
-
-
-def _rate_step(
-    gains: _RateGains,
-    offset: Sequence[float],
-    wrench_error_prev: Sequence[float],
-    wrench_error: Sequence[float],
-    dt: float,
-) -> tuple[list[float], list[float]]:
-    """``_combined_step`` on six floats each, ``dt`` already checked: ``(offset, twist)``.
-
-    Written out per axis: on six numbers a Python loop costs more than the arithmetic.
-    """
-    a0, a1, a2, a3, a4, a5 = gains[0]  # S K1
-    b0, b1, b2, b3, b4, b5 = gains[1]  # S K2
-    e0, e1, e2, e3, e4, e5 = wrench_error
-    p0, p1, p2, p3, p4, p5 = wrench_error_prev
-    v0 = a0 * ((e0 - p0) / dt) + b0 * e0
-    v1 = a1 * ((e1 - p1) / dt) + b1 * e1
-    v2 = a2 * ((e2 - p2) / dt) + b2 * e2
-    v3 = a3 * ((e3 - p3) / dt) + b3 * e3
-    v4 = a4 * ((e4 - p4) / dt) + b4 * e4
-    v5 = a5 * ((e5 - p5) / dt) + b5 * e5
-    x0, x1, x2, x3, x4, x5 = offset
-    offset_new = [
-        x0 + v0 * dt,
-        x1 + v1 * dt,
-        x2 + v2 * dt,
-        x3 + v3 * dt,
-        x4 + v4 * dt,
-        x5 + v5 * dt,
-    ]
-    return offset_new, [v0, v1, v2, v3, v4, v5]
-
-
-def _rate_gains_of(law: object) -> _RateGains | None:
-    """(S K1, S K2) of an Eq. 24-27 law as floats; None for a law of another form.
-
-    The controller steps :class:`CombinedLaw`, :class:`PositionLaw` and :class:`VelocityLaw`
-    with :func:`_rate_step`, any other law through its own ``step``.
-    """
-    if isinstance(law, (CombinedLaw, PositionLaw, VelocityLaw)):
-        return law._rate_gains
-    return None
 
 
 @dataclass(frozen=True)
@@ -268,16 +228,14 @@ class CombinedLaw:
     k1_m_per_N: NDArray[np.float64]
     k2_m_per_s_N: NDArray[np.float64]
     selection: NDArray[np.float64]
-    _s: NDArray[np.float64] = field(init=False, repr=False, compare=False)
-    _rate_gains: _RateGains = field(init=False, repr=False, compare=False)
+    _gains: _SelectedGains = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "k1_m_per_N", _frozen_diag("k1_m_per_N", self.k1_m_per_N))
         object.__setattr__(self, "k2_m_per_s_N", _frozen_diag("k2_m_per_s_N", self.k2_m_per_s_N))
         object.__setattr__(self, "selection", _frozen_selection(self.selection))
-        s = _diagonal(self.selection)
-        object.__setattr__(self, "_s", s)
-        object.__setattr__(self, "_rate_gains", _rate_gains(self.k1_m_per_N, self.k2_m_per_s_N, s))
+        gains = _selected_gains(self.k1_m_per_N, self.k2_m_per_s_N, self.selection)
+        object.__setattr__(self, "_gains", gains)
 
     def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
         """At rest; ``wrench_error`` [N, N*m] is the previous input the derivative starts from."""
@@ -296,8 +254,7 @@ class CombinedLaw:
         Returns:
             ``(new_state, twist)``, twist [m/s, rad/s] in the control frame, shape (6,).
         """
-        k1, k2 = self.k1_m_per_N, self.k2_m_per_s_N
-        return _combined_step(k1, k2, self._s, state, wrench_error, dt)
+        return _rate_law_step(self._gains, state, wrench_error, dt)
 
 
 @dataclass(frozen=True)
@@ -311,15 +268,13 @@ class PositionLaw:
 
     k1_m_per_N: NDArray[np.float64]
     selection: NDArray[np.float64]
-    _s: NDArray[np.float64] = field(init=False, repr=False, compare=False)
-    _rate_gains: _RateGains = field(init=False, repr=False, compare=False)
+    _gains: _SelectedGains = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "k1_m_per_N", _frozen_diag("k1_m_per_N", self.k1_m_per_N))
         object.__setattr__(self, "selection", _frozen_selection(self.selection))
-        s = _diagonal(self.selection)
-        object.__setattr__(self, "_s", s)
-        object.__setattr__(self, "_rate_gains", _rate_gains(self.k1_m_per_N, _ZERO6, s))
+        gains = _selected_gains(self.k1_m_per_N, _ZERO6, self.selection)
+        object.__setattr__(self, "_gains", gains)
 
     def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
         """At rest; ``wrench_error`` [N, N*m] is the input at which ΔX = 0."""
@@ -329,7 +284,7 @@ class PositionLaw:
         self, state: LawState, wrench_error: ArrayLike, dt: float
     ) -> tuple[LawState, NDArray[np.float64]]:
         """One period: see :meth:`CombinedLaw.step`."""
-        return _combined_step(self.k1_m_per_N, _ZERO6, self._s, state, wrench_error, dt)
+        return _rate_law_step(self._gains, state, wrench_error, dt)
 
 
 @dataclass(frozen=True)
@@ -343,15 +298,13 @@ class VelocityLaw:
 
     k2_m_per_s_N: NDArray[np.float64]
     selection: NDArray[np.float64]
-    _s: NDArray[np.float64] = field(init=False, repr=False, compare=False)
-    _rate_gains: _RateGains = field(init=False, repr=False, compare=False)
+    _gains: _SelectedGains = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "k2_m_per_s_N", _frozen_diag("k2_m_per_s_N", self.k2_m_per_s_N))
         object.__setattr__(self, "selection", _frozen_selection(self.selection))
-        s = _diagonal(self.selection)
-        object.__setattr__(self, "_s", s)
-        object.__setattr__(self, "_rate_gains", _rate_gains(_ZERO6, self.k2_m_per_s_N, s))
+        gains = _selected_gains(_ZERO6, self.k2_m_per_s_N, self.selection)
+        object.__setattr__(self, "_gains", gains)
 
     def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
         """At rest."""
@@ -361,4 +314,51 @@ class VelocityLaw:
         self, state: LawState, wrench_error: ArrayLike, dt: float
     ) -> tuple[LawState, NDArray[np.float64]]:
         """One period: see :meth:`CombinedLaw.step`."""
-        return _combined_step(_ZERO6, self.k2_m_per_s_N, self._s, state, wrench_error, dt)
+        return _rate_law_step(self._gains, state, wrench_error, dt)
+
+
+@dataclass(frozen=True)
+class MassDamperSpringLaw:
+    """M x'' + D x' + K x = S ΔF per axis (ros2_controllers' admittance_controller).
+
+    ``x`` is the law's ``offset`` from where it started. Integrated with semi-implicit Euler:
+    ``a = (ΔF - D v - K x) / M; v += a dt; x += v dt``, stable for ``dt < 2 sqrt(M/K)``
+    on each axis.
+
+    Attributes:
+        mass_kg: M, a scalar or diagonal (6,) [kg; kg*m^2], > 0.
+        damping_N_s_per_m: D, a scalar or diagonal (6,) [N*s/m; N*m*s/rad], >= 0.
+        stiffness_N_per_m: K, a scalar or diagonal (6,) [N/m; N*m/rad], >= 0 (0: no return).
+        selection: S (see :class:`CombinedLaw`).
+    """
+
+    mass_kg: NDArray[np.float64]
+    damping_N_s_per_m: NDArray[np.float64]
+    stiffness_N_per_m: NDArray[np.float64]
+    selection: NDArray[np.float64]
+    _s: NDArray[np.float64] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "mass_kg", _frozen_diag("mass_kg", self.mass_kg, positive=True))
+        for name in ("damping_N_s_per_m", "stiffness_N_per_m"):
+            object.__setattr__(self, name, _frozen_diag(name, getattr(self, name)))
+        object.__setattr__(self, "selection", _frozen_selection(self.selection))
+        object.__setattr__(self, "_s", _diagonal(self.selection))
+
+    def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
+        """At rest at the start point (offset 0, twist 0)."""
+        return _rest_state(wrench_error)
+
+    def step(
+        self, state: LawState, wrench_error: ArrayLike, dt: float
+    ) -> tuple[LawState, NDArray[np.float64]]:
+        """One period: see :meth:`CombinedLaw.step`."""
+        _check_dt(dt)
+        e = _vector6(wrench_error)
+        s = self._s
+        accel = (
+            s * e - self.damping_N_s_per_m * state.twist - self.stiffness_N_per_m * state.offset
+        ) / self.mass_kg
+        twist = s * (state.twist + accel * dt)
+        offset = state.offset + twist * dt
+        return LawState(offset, twist, e), twist

@@ -1,8 +1,11 @@
 """The safety envelope around an admittance law: limits, protective stops and a sample watchdog.
 
-All functions are pure. The controller (:mod:`ftcomp.control.controller`) applies them each
-period in this order: watchdog on the sample, force/torque limit on the *unfiltered* contact
-wrench, then (after the law) velocity and acceleration limits on the twist, then the travel limit.
+All functions are pure, and each check exists once: the controller
+(:mod:`ftcomp.control.controller`) calls these same functions each period, in this order: watchdog
+on the sample (:func:`check_sample`), the sensor's range on the raw reading (:func:`check_range`),
+force/torque limit on the *unfiltered* contact wrench (:func:`check_wrench`), then (after the law)
+velocity and acceleration limits on the twist (:func:`limit_twist`), then the travel limit
+(:func:`check_travel`).
 A stop is latched and zeroes the twist at once (not ramped by the acceleration limit): a
 protective stop must act within the control period that saw the fault.
 
@@ -15,7 +18,6 @@ from __future__ import annotations
 
 import enum
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -29,6 +31,7 @@ __all__ = [
     "SafetyLimits",
     "StopReason",
     "WatchdogState",
+    "check_range",
     "check_sample",
     "check_travel",
     "check_wrench",
@@ -95,16 +98,12 @@ class SafetyLimits:
     max_repeated_samples: int = 0
     max_identical_samples: int | None = None
     sensor_range: tuple[float, float] | None = None
-    # The three vectors as floats, prepared once for the float kernels the controller calls.
-    _max_twist: tuple[float, ...] = field(init=False, repr=False, compare=False)
-    _max_twist_rate: tuple[float, ...] = field(init=False, repr=False, compare=False)
-    _max_travel: tuple[float, ...] = field(init=False, repr=False, compare=False)
+    # sensor_range per axis, [F, F, F, T, T, T], prepared once for check_range.
+    _range_per_axis: NDArray[np.float64] | None = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for name in ("max_twist", "max_twist_rate", "max_travel"):
-            arr = _positive6(name, getattr(self, name))
-            object.__setattr__(self, name, arr)
-            object.__setattr__(self, f"_{name}", tuple(arr.tolist()))
+            object.__setattr__(self, name, _positive6(name, getattr(self, name)))
         for name in ("max_force_N", "max_torque_Nm", "stale_after_s"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value > 0.0 and not math.isnan(value)):
@@ -121,6 +120,8 @@ class SafetyLimits:
             len(r) == 2 and all(isinstance(v, (int, float)) and v > 0.0 for v in r)
         ):
             raise ParameterError(f"sensor_range must be (force_N, torque_Nm) > 0, got {r!r}")
+        per_axis = None if r is None else frozen_array(np.repeat(r, 3), (6,), name="sensor_range")
+        object.__setattr__(self, "_range_per_axis", per_axis)
 
 
 class WatchdogState(NamedTuple):
@@ -141,12 +142,12 @@ class WatchdogState(NamedTuple):
     last_wrench: tuple[float, ...] = ()
 
 
-def _floats(value: ArrayLike, name: str | None = None) -> list[float]:
-    """``value`` as a flat list of floats; with a ``name``, it must have shape (6,)."""
+def _vector6(value: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``value`` as a float array of shape (6,) (not copied when it already is one)."""
     arr = np.asarray(value, dtype=float)
-    if name is not None and arr.shape != (6,):
+    if arr.shape != (6,):
         raise ParameterError(f"{name} must have shape (6,), got {arr.shape}")
-    return arr.ravel().tolist()
+    return arr
 
 
 def check_sample(
@@ -169,24 +170,11 @@ def check_sample(
     Returns:
         ``(new_state, reason)``; ``reason`` is None when the sample may be used.
     """
-    return _check_sample(limits, state, t_sample, _floats(wrench), now)
-
-
-def _check_sample(
-    limits: SafetyLimits,
-    state: WatchdogState,
-    t_sample: float,
-    wrench: Sequence[float],
-    now: float,
-) -> tuple[WatchdogState, StopReason | None]:
-    """:func:`check_sample` on a list of floats (the controller's kernel)."""
     # A clock that is NaN or runs backwards would disable the stale check: stop instead.
     if not (now >= state.last_now and math.isfinite(now)):
         return state, StopReason.CLOCK_FAULT
-    # One sum is finite exactly when every term is, unless finite terms overflow: then look closer.
-    if not math.isfinite(t_sample + sum(wrench)) and not (
-        math.isfinite(t_sample) and all(map(math.isfinite, wrench))
-    ):
+    values = tuple(np.asarray(wrench, dtype=float).ravel().tolist())
+    if not (math.isfinite(t_sample) and all(map(math.isfinite, values))):
         return state, StopReason.NON_FINITE_SAMPLE
     if t_sample <= state.last_t:
         repeats = state.repeats + 1
@@ -198,7 +186,6 @@ def _check_sample(
         return new, None
     if now - t_sample > limits.stale_after_s:
         return state, StopReason.STALE_SAMPLE
-    values = tuple(wrench)
     identical = state.identical + 1 if values == state.last_wrench else 0
     new = WatchdogState(t_sample, 0, now, identical, values)
     if limits.max_identical_samples is not None and identical > limits.max_identical_samples:
@@ -206,26 +193,31 @@ def _check_sample(
     return new, None
 
 
-def _saturated(limits: SafetyLimits, raw: Sequence[float]) -> bool:
-    """Whether a raw reading is at or beyond the sensor's range on any axis."""
-    if limits.sensor_range is None:
-        return False
-    force, torque = limits.sensor_range
-    f0, f1, f2, t0, t1, t2 = raw
-    return max(abs(f0), abs(f1), abs(f2)) >= force or max(abs(t0), abs(t1), abs(t2)) >= torque
+def check_range(limits: SafetyLimits, wrench_raw: ArrayLike) -> StopReason | None:
+    """SENSOR_SATURATED when a raw reading is at or beyond the sensor's range on any axis.
+
+    Args:
+        limits: the envelope; without ``sensor_range`` nothing is checked.
+        wrench_raw: the uncompensated reading [N, N*m], sensor frame, shape (6,).
+    """
+    if limits._range_per_axis is None:
+        return None
+    if (abs(_vector6(wrench_raw, "wrench_raw")) >= limits._range_per_axis).any():
+        return StopReason.SENSOR_SATURATED
+    return None
 
 
 def check_wrench(limits: SafetyLimits, wrench: ArrayLike) -> StopReason | None:
-    """FORCE_LIMIT or TORQUE_LIMIT when the contact wrench's force or torque norm is too large."""
-    return _check_wrench(limits, _floats(wrench, "wrench"))
+    """FORCE_LIMIT or TORQUE_LIMIT when the contact wrench's force or torque norm is too large.
 
-
-def _check_wrench(limits: SafetyLimits, wrench: Sequence[float]) -> StopReason | None:
-    """:func:`check_wrench` on six floats (the controller's kernel)."""
-    fx, fy, fz, tx, ty, tz = wrench
-    if math.sqrt(fx * fx + fy * fy + fz * fz) > limits.max_force_N:
+    Args:
+        limits: the envelope.
+        wrench: the contact wrench [N, N*m], any frame, shape (6,).
+    """
+    fx, fy, fz, tx, ty, tz = _vector6(wrench, "wrench").tolist()
+    if math.hypot(fx, fy, fz) > limits.max_force_N:
         return StopReason.FORCE_LIMIT
-    if math.sqrt(tx * tx + ty * ty + tz * tz) > limits.max_torque_Nm:
+    if math.hypot(tx, ty, tz) > limits.max_torque_Nm:
         return StopReason.TORQUE_LIMIT
     return None
 
@@ -249,42 +241,10 @@ def limit_twist(
     """
     if not dt > 0.0:
         raise ParameterError(f"dt must be > 0 s, got {dt}")
-    cmd, prev = _floats(twist_cmd, "twist_cmd"), _floats(twist_prev, "twist_prev")
-    return np.array(_limit_twist(limits, cmd, prev, dt))
-
-
-def _limit_twist(
-    limits: SafetyLimits, twist_cmd: Sequence[float], twist_prev: Sequence[float], dt: float
-) -> list[float]:
-    """:func:`limit_twist` on six floats each, ``dt`` already checked (the controller's kernel).
-
-    Exactly :func:`numpy.clip` twice, written out per axis (a loop costs more than the clamps).
-    A NaN or an infinity takes numpy's own clip, which passes a NaN through.
-    """
-    v0, v1, v2, v3, v4, v5 = twist_cmd
-    p0, p1, p2, p3, p4, p5 = twist_prev
-    if not math.isfinite(v0 + v1 + v2 + v3 + v4 + v5 + p0 + p1 + p2 + p3 + p4 + p5):
-        prev = np.array(twist_prev, dtype=float)
-        v = np.clip(np.array(twist_cmd, dtype=float), -limits.max_twist, limits.max_twist)
-        step = limits.max_twist_rate * dt
-        return np.clip(v, prev - step, prev + step).tolist()
-    m0, m1, m2, m3, m4, m5 = limits._max_twist
-    v0 = -m0 if v0 < -m0 else m0 if v0 > m0 else v0
-    v1 = -m1 if v1 < -m1 else m1 if v1 > m1 else v1
-    v2 = -m2 if v2 < -m2 else m2 if v2 > m2 else v2
-    v3 = -m3 if v3 < -m3 else m3 if v3 > m3 else v3
-    v4 = -m4 if v4 < -m4 else m4 if v4 > m4 else v4
-    v5 = -m5 if v5 < -m5 else m5 if v5 > m5 else v5
-    a0, a1, a2, a3, a4, a5 = limits._max_twist_rate
-    s0, s1, s2, s3, s4, s5 = a0 * dt, a1 * dt, a2 * dt, a3 * dt, a4 * dt, a5 * dt
-    return [
-        p0 - s0 if v0 < p0 - s0 else p0 + s0 if v0 > p0 + s0 else v0,
-        p1 - s1 if v1 < p1 - s1 else p1 + s1 if v1 > p1 + s1 else v1,
-        p2 - s2 if v2 < p2 - s2 else p2 + s2 if v2 > p2 + s2 else v2,
-        p3 - s3 if v3 < p3 - s3 else p3 + s3 if v3 > p3 + s3 else v3,
-        p4 - s4 if v4 < p4 - s4 else p4 + s4 if v4 > p4 + s4 else v4,
-        p5 - s5 if v5 < p5 - s5 else p5 + s5 if v5 > p5 + s5 else v5,
-    ]
+    prev = _vector6(twist_prev, "twist_prev")
+    twist = _vector6(twist_cmd, "twist_cmd").clip(-limits.max_twist, limits.max_twist)
+    rate_step = limits.max_twist_rate * dt
+    return twist.clip(prev - rate_step, prev + rate_step)
 
 
 def check_travel(
@@ -302,26 +262,8 @@ def check_travel(
         ``(new_travel, reason)``: with TRAVEL_LIMIT the travel is left unchanged (the twist must
         not be sent).
     """
-    current = np.asarray(travel, dtype=float)
-    new, reason = _check_travel(limits, _floats(current, "travel"), _floats(twist, "twist"), dt)
-    return (current, reason) if reason is not None else (np.array(new), None)
-
-
-def _check_travel(
-    limits: SafetyLimits, travel: Sequence[float], twist: Sequence[float], dt: float
-) -> tuple[Sequence[float], StopReason | None]:
-    """:func:`check_travel` on six floats each (the controller's kernel)."""
-    x0, x1, x2, x3, x4, x5 = travel
-    v0, v1, v2, v3, v4, v5 = twist
-    x0, x1, x2, x3, x4, x5 = (
-        x0 + v0 * dt,
-        x1 + v1 * dt,
-        x2 + v2 * dt,
-        x3 + v3 * dt,
-        x4 + v4 * dt,
-        x5 + v5 * dt,
-    )
-    m0, m1, m2, m3, m4, m5 = limits._max_travel
-    if abs(x0) > m0 or abs(x1) > m1 or abs(x2) > m2 or abs(x3) > m3 or abs(x4) > m4 or abs(x5) > m5:
-        return travel, StopReason.TRAVEL_LIMIT
-    return [x0, x1, x2, x3, x4, x5], None
+    current = _vector6(travel, "travel")
+    new = current + _vector6(twist, "twist") * dt
+    if (abs(new) > limits.max_travel).any():
+        return current, StopReason.TRAVEL_LIMIT
+    return new, None

@@ -29,7 +29,6 @@ from ftcomp.samples import WRENCH_COLUMNS
 from ftcomp.views.html import Section, Table
 
 __all__ = [
-    "TRUTH_HEADER",
     "CalibrationMetrics",
     "NoGripperWeighing",
     "calibration_section",

@@ -30,7 +30,6 @@ from ftcomp.session.placement import (
     sweep_gains,
     write_placement_outputs,
 )
-from ftcomp.views.figures import plot_placement
 from ftcomp.sim.placement_cell import SimPlacementCell
 from ftcomp.views.figures import plot_placement
 from ftcomp.views.html import Cell, Figure, Link, Mark, Section, Table
@@ -225,7 +224,9 @@ def placement_section(
     def keep(name: str, label: str, result: PlacementResult) -> None:
         run = runs[name] = PlacementRun.of(name, label, result)
         write_placement_outputs(result, out / "placement" / name)
-        plot_placement([result], out / "placement" / name / "placement.png", title=f"{label}: {run.verdict}")
+        plot_placement(
+            [result], out / "placement" / name / "placement.png", title=f"{label}: {run.verdict}"
+        )
         advance(f"placement {name}")
 
     plan: list[tuple[str, str, PlacementConfig, str]] = [

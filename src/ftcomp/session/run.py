@@ -32,12 +32,12 @@ from ftcomp.control.filters import LowPassFilter
 from ftcomp.control.laws import (
     AdmittanceLaw,
     CombinedLaw,
+    MassDamperSpringLaw,
     PositionLaw,
     VelocityLaw,
     selection_matrix,
 )
 from ftcomp.control.loop import ControlCycle, run_loop
-from ftcomp.control.mass_damper_spring import MassDamperSpringLaw
 from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import quat_from_matrix
