@@ -218,8 +218,9 @@ def relative_error_percent(
     residuals: NDArray[np.float64], wrench_mean: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """The paper's Table 3: ``100 |residual| / |wrench_mean|`` per pose and axis, (P, 6); NaN
-    where the mean reading is 0 (no relative error can be measured)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
+    where the mean reading is 0 or so small the ratio overflows (no relative error can be
+    measured)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         relative = 100.0 * np.abs(residuals) / np.abs(wrench_mean)
     relative[~np.isfinite(relative)] = np.nan
     return relative

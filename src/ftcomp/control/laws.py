@@ -208,8 +208,35 @@ def _rate_law_step(
     return LawState(state.offset + twist * dt, twist, e), twist
 
 
+class _RateLaw:
+    """The Eq. 24-27 laws' common part: at rest to start, then :func:`_rate_law_step` with the
+    gains a law prepared (``_gains``, S folded in)."""
+
+    _gains: _SelectedGains
+
+    def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
+        """At rest; ``wrench_error`` [N, N*m] is the previous input (the derivative starts from
+        it; for the position law, the input at which ΔX = 0)."""
+        return _rest_state(wrench_error)
+
+    def step(
+        self, state: LawState, wrench_error: ArrayLike, dt: float
+    ) -> tuple[LawState, NDArray[np.float64]]:
+        """One period.
+
+        Args:
+            state: from ``initial_state`` or the previous step.
+            wrench_error: ΔF [N, N*m], control frame, shape (6,).
+            dt: period [s], > 0.
+
+        Returns:
+            ``(new_state, twist)``, twist [m/s, rad/s] in the control frame, shape (6,).
+        """
+        return _rate_law_step(self._gains, state, wrench_error, dt)
+
+
 @dataclass(frozen=True)
-class CombinedLaw:
+class CombinedLaw(_RateLaw):
     """ΔV = S (K1 dΔF/dt + K2 ΔF), paper Eq. 26-27.
 
     Attributes:
@@ -237,28 +264,9 @@ class CombinedLaw:
         gains = _selected_gains(self.k1_m_per_N, self.k2_m_per_s_N, self.selection)
         object.__setattr__(self, "_gains", gains)
 
-    def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
-        """At rest; ``wrench_error`` [N, N*m] is the previous input the derivative starts from."""
-        return _rest_state(wrench_error)
-
-    def step(
-        self, state: LawState, wrench_error: ArrayLike, dt: float
-    ) -> tuple[LawState, NDArray[np.float64]]:
-        """One period.
-
-        Args:
-            state: from ``initial_state`` or the previous step.
-            wrench_error: ΔF [N, N*m], control frame, shape (6,).
-            dt: period [s], > 0.
-
-        Returns:
-            ``(new_state, twist)``, twist [m/s, rad/s] in the control frame, shape (6,).
-        """
-        return _rate_law_step(self._gains, state, wrench_error, dt)
-
 
 @dataclass(frozen=True)
-class PositionLaw:
+class PositionLaw(_RateLaw):
     """ΔX = S K1 ΔF, paper Eq. 24, executed incrementally (see the module docstring).
 
     Attributes:
@@ -276,19 +284,9 @@ class PositionLaw:
         gains = _selected_gains(self.k1_m_per_N, _ZERO6, self.selection)
         object.__setattr__(self, "_gains", gains)
 
-    def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
-        """At rest; ``wrench_error`` [N, N*m] is the input at which ΔX = 0."""
-        return _rest_state(wrench_error)
-
-    def step(
-        self, state: LawState, wrench_error: ArrayLike, dt: float
-    ) -> tuple[LawState, NDArray[np.float64]]:
-        """One period: see :meth:`CombinedLaw.step`."""
-        return _rate_law_step(self._gains, state, wrench_error, dt)
-
 
 @dataclass(frozen=True)
-class VelocityLaw:
+class VelocityLaw(_RateLaw):
     """ΔV = S K2 ΔF, paper Eq. 25.
 
     Attributes:
@@ -305,16 +303,6 @@ class VelocityLaw:
         object.__setattr__(self, "selection", _frozen_selection(self.selection))
         gains = _selected_gains(_ZERO6, self.k2_m_per_s_N, self.selection)
         object.__setattr__(self, "_gains", gains)
-
-    def initial_state(self, wrench_error: ArrayLike | None = None) -> LawState:
-        """At rest."""
-        return _rest_state(wrench_error)
-
-    def step(
-        self, state: LawState, wrench_error: ArrayLike, dt: float
-    ) -> tuple[LawState, NDArray[np.float64]]:
-        """One period: see :meth:`CombinedLaw.step`."""
-        return _rate_law_step(self._gains, state, wrench_error, dt)
 
 
 @dataclass(frozen=True)
