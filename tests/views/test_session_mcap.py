@@ -4,6 +4,7 @@ and ``import-bag`` turns a recording's MCAP back into samples that calibrate lik
 from __future__ import annotations
 
 import json
+import sys
 import threading
 from collections.abc import Sequence
 from pathlib import Path
@@ -13,7 +14,7 @@ import pytest
 from rosbags.highlevel import AnyReader
 
 from ftcomp.cli import main
-from ftcomp.session.log import ObserverThread
+from ftcomp.session.log import SWITCH_INTERVAL_S, ObserverThread
 
 SIM = "sim://?seed=4"
 
@@ -171,7 +172,9 @@ class _Recorder:
 
 def test_observers_see_everything_in_order_on_their_own_thread() -> None:
     seen = _Recorder()
+    before = sys.getswitchinterval()
     thread = ObserverThread([seen])
+    assert sys.getswitchinterval() == pytest.approx(min(before, SWITCH_INTERVAL_S), rel=1e-6)
     thread.open(["t"])
     for k in range(100):
         thread.row(k, [k * 1e-9])
@@ -185,6 +188,7 @@ def test_observers_see_everything_in_order_on_their_own_thread() -> None:
         ("close", None),
     ]
     assert seen.thread == {"ftcomp-observers"}
+    assert sys.getswitchinterval() == before
 
 
 def test_an_observer_error_is_raised_at_close_not_in_the_loop() -> None:
