@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
-from ftcomp.cli.live_status import add_view_arguments
+from ftcomp.cli.live_status import PoseProgress, add_view_arguments
 from ftcomp.errors import ParameterError
 
 if TYPE_CHECKING:
@@ -199,14 +199,19 @@ def run(args: argparse.Namespace) -> int:
         open_hardware(args) as (robot, sensor, mount),
     ):
         print(intro, flush=True)
-        result = record(
-            robot,
-            sensor,
-            config,
-            mount=mount,
-            on_event=lambda e: _announce(e, plan),
-            observers=observers,
-        )
+        progress = PoseProgress("poses", plan.n_poses)
+
+        def on_event(event: PoseEvent) -> None:
+            _announce(event, plan)
+            if event.record is not None:
+                progress.advance()
+
+        try:
+            result = record(
+                robot, sensor, config, mount=mount, on_event=on_event, observers=observers
+            )
+        finally:
+            progress.close()
     summary = f"{result.output}: {result.poses_recorded} poses ({result.readings} readings)"
     if result.ended == "complete":
         print(f"wrote {summary}")

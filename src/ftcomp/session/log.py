@@ -33,10 +33,11 @@ from ftcomp.io.timestamps import format_time
 
 __all__ = ["SWITCH_INTERVAL_S", "CsvLog", "LogObserver", "ObserverThread", "csv_log"]
 
-#: The interpreter's thread switch interval while observers run [s]: the longest the control
-#: loop waits for the interpreter's lock when an observer is busy (a tenth of a 1 kHz period
-#: here, against 5 ms by default).
-SWITCH_INTERVAL_S = 1e-4
+#: The interpreter's thread switch interval while observers run [s]: about the longest the
+#: control loop waits for the interpreter's lock when an observer is busy (a quarter of a
+#: 500 Hz period, against 5 ms by default; shorter makes the two threads trade the lock so
+#: often that the loop's own cycle grows, bench/bench_view.py).
+SWITCH_INTERVAL_S = 5e-4
 
 
 @runtime_checkable
