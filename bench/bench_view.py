@@ -64,12 +64,6 @@ class _Sensor:
     def read_new(self) -> list[Any]:
         return [self.read()]
 
-    def __enter__(self) -> _Sensor:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
 
 class _Robot:
     """``fixed://`` that notes the slack of every period it waits for [s] (< 0: missed)."""
@@ -147,14 +141,9 @@ def one_run(variant: str, seconds: float, folder: Path) -> tuple[int, int, float
 
     fixed = ftcomp.open_robot("fixed://?rpy_deg=180,0,0&rate_hz=500")
     robot = _Robot(fixed)
-    limits = SafetyLimits(
-        max_twist=np.array([0.02] * 3 + [0.5] * 3),
-        max_twist_rate=np.array([0.5] * 3 + [5.0] * 3),
-        max_travel=np.array([0.02] * 3 + [0.1] * 3),
-        max_force_N=40.0,
-        max_torque_Nm=8.0,
-        stale_after_s=0.02,
-    )
+    # ftcomp run's default envelope (never reached: a dry run of a still sensor)
+    twist, rate, travel = np.repeat([0.02, 0.5], 3), np.repeat([0.5, 5.0], 3), np.full(6, 0.02)
+    limits = SafetyLimits(twist, rate, travel, 40.0, 8.0, stale_after_s=0.02)
     config = RunConfig(
         AdmittanceConfig(limits), duration_s=seconds, dry_run=True, max_late_cycles=10**6
     )
@@ -162,7 +151,8 @@ def one_run(variant: str, seconds: float, folder: Path) -> tuple[int, int, float
     port = _free_port()
     view = f"127.0.0.1:{port}" if variant in ("view", "both") else None
     watcher = None
-    with session_observers(log, view, overwrite=True) as observers, fixed, _Sensor() as sensor:
+    sensor = _Sensor()
+    with session_observers(log, view, overwrite=True) as observers, fixed:
         if view is not None:
             watcher = subprocess.Popen(
                 [sys.executable, __file__, "--client", str(port)], stdout=subprocess.PIPE, text=True

@@ -82,15 +82,20 @@ def test_import_bag_turns_a_recording_mcap_into_samples_that_calibrate_like_its_
     assert a["base_tilt_deg"] == pytest.approx(b["base_tilt_deg"], rel=1e-9, abs=1e-12)
 
 
+def _live(folder: Path, argv: list[str]) -> tuple[dict[str, np.ndarray], dict[str, list]]:
+    """Run a live command on sim:// with ``-o`` and ``--log``: its CSV and its messages."""
+    out, log = folder / f"{argv[0]}.csv", folder / f"{argv[0]}.mcap"
+    robot = ["--robot", SIM, "--sensor", "sim://"]
+    assert main([argv[0], *robot, *argv[1:], "-o", str(out), "--log", str(log)]) == 0
+    return _csv(out), _messages(log)
+
+
 def test_run_log_has_every_channel_with_the_csv_rows_values_and_stamps(
     tmp_path: Path, recording: tuple[Path, Path, Path]
 ) -> None:
-    _, _, cal = recording
-    out, log = tmp_path / "run.csv", tmp_path / "run.mcap"
-    argv = ["run", "--robot", SIM, "--sensor", "sim://", "-c", str(cal), "--control", "admittance"]
-    argv += ["--dry-run", "--seconds", "0.2", "-o", str(out), "--log", str(log)]
-    assert main(argv) == 0
-    csv, messages = _csv(out), _messages(log)
+    cal = str(recording[2])
+    argv = ["run", "-c", cal, "--control", "admittance", "--dry-run", "--seconds", "0.2"]
+    csv, messages = _live(tmp_path, argv)
     rows = len(csv["t_s"])
     counts = {topic: len(m) for topic, m in messages.items() if topic != "/ftcomp/events"}
     assert counts == dict.fromkeys(
@@ -119,11 +124,7 @@ def test_run_log_has_every_channel_with_the_csv_rows_values_and_stamps(
 def test_stream_log_has_a_message_per_csv_row(
     tmp_path: Path, recording: tuple[Path, Path, Path]
 ) -> None:
-    _, _, cal = recording
-    out, log = tmp_path / "stream.csv", tmp_path / "stream.mcap"
-    argv = ["stream", "--robot", SIM, "--sensor", "sim://", "-c", str(cal), "--seconds", "0.1"]
-    assert main([*argv, "-o", str(out), "--log", str(log)]) == 0
-    csv, messages = _csv(out), _messages(log)
+    csv, messages = _live(tmp_path, ["stream", "-c", str(recording[2]), "--seconds", "0.1"])
     rows = len(csv["t"])
     assert {t: len(m) for t, m in messages.items()} == {
         "/ftcomp/wrench_raw": rows,
