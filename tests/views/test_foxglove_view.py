@@ -158,7 +158,10 @@ def test_a_bad_view_address_is_one_line_and_exit_2(
 
 
 def test_the_view_refuses_a_port_without_a_host() -> None:
+    from ftcomp.cli.live_status import view_address
     from ftcomp.views.foxglove_view import parse_address
+
+    assert view_address("8765") == "127.0.0.1:8765"  # --view PORT: loopback only
 
     assert parse_address("127.0.0.2:9000") == ("127.0.0.2", 9000)
     with pytest.raises(ParameterError, match="HOST:PORT"):

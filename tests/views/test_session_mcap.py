@@ -149,6 +149,16 @@ def test_a_log_that_exists_is_refused_before_anything_runs(
     assert log.read_text() == "keep me" and not (tmp_path / "s.csv").exists()
 
 
+def test_a_command_that_fails_before_its_session_leaves_no_log(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    log = tmp_path / "run.mcap"
+    argv = ["stream", "--robot", "sim://", "--sensor", "netft://127.0.0.9?connect_timeout_s=0.2"]
+    code = main([*argv, "--seconds", "0.1", "-o", str(tmp_path / "s.csv"), "--log", str(log)])
+    assert code != 0 and capsys.readouterr().err.startswith("error: ")
+    assert list(tmp_path.iterdir()) == []  # neither the log nor its temporary folder
+
+
 class _Recorder:
     def __init__(self, fail_at: int | None = None) -> None:
         self.calls: list[tuple[str, object]] = []

@@ -267,12 +267,16 @@ class McapLog:
 
     def close(self) -> None:
         """Finish the MCAP file and move it into place (idempotent)."""
+        self._finish(keep=True)
+
+    def _finish(self, *, keep: bool) -> None:
         if self._writer is None:
             return
         writer, self._writer = self._writer, None
         try:
             writer.close()
-            os.replace(self._tmp / "log" / "log.mcap", self.path)
+            if keep:
+                os.replace(self._tmp / "log" / "log.mcap", self.path)
         finally:
             shutil.rmtree(self._tmp, ignore_errors=True)
 
@@ -309,9 +313,11 @@ class SessionMcapLog(McapLog):
         )
         self.control_frame = clean_frame(control_frame)
         self.layout = RowLayout(())
+        self.opened = False
 
     def open(self, columns: Sequence[str]) -> None:
         """Open the channels the columns fill."""
+        self.opened = True
         self.layout = RowLayout(columns)
         for topic in self.layout.channels:
             self.add_topic(topic, SESSION_TOPICS[topic])
@@ -346,6 +352,11 @@ class SessionMcapLog(McapLog):
         return T["std_msgs/msg/Float64MultiArray"](
             layout=layout, data=np.asarray(values, dtype=np.float64)
         )
+
+    def close(self) -> None:
+        """Finish the file and move it into place; a log no session opened (the command failed
+        before its session began) leaves no file (idempotent)."""
+        self._finish(keep=self.opened)
 
     def event(self, t_ns: int, kind: str, text: str) -> None:
         """Write an event on ``/ftcomp/events``."""
