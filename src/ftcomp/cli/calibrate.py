@@ -15,6 +15,7 @@ from ftcomp.calibration.identify import calibrate
 from ftcomp.calibration_record import Calibration
 from ftcomp.cli.common import add_range_argument, print_warnings
 from ftcomp.errors import ParameterError
+from ftcomp.extras import require_extra
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.calibration_json import calibration_to_dict, save_calibration
 from ftcomp.io.samples_csv import read_samples
@@ -75,6 +76,13 @@ def register(parser: argparse.ArgumentParser) -> None:
         "(with or without -o; default: tables)",
     )
     parser.add_argument(
+        "--report",
+        metavar="CAL.html",
+        help="also write one self-contained page to look at: the poses' gravity directions on "
+        "the sphere, residuals, leave-one-pose-out, condition and what would improve it, the "
+        "drift (needs matplotlib, extra report; default: none)",
+    )
+    parser.add_argument(
         "--force", action="store_true", help="replace an existing -o file (default: refuse)"
     )
     parser.set_defaults(handler=run)
@@ -85,6 +93,10 @@ def run(args: argparse.Namespace) -> int:
     output = None
     if args.output is not None:
         output = check_writable(args.output, overwrite=args.force, inputs=[args.samples])
+    if args.report is not None:
+        others = [args.samples, *([args.output] if args.output else [])]
+        check_writable(args.report, overwrite=args.force, inputs=others)
+        require_extra("report", "calibrate --report")
     force_range, torque_range = args.range if args.range else (None, None)
     samples = read_samples(args.samples, force_range_N=force_range, torque_range_Nm=torque_range)
     print_warnings(samples.warnings)
@@ -101,6 +113,10 @@ def run(args: argparse.Namespace) -> int:
         result = calibrate(samples, method=args.method)
     if output is not None:
         save_calibration(output, result)
+    if args.report is not None:
+        from ftcomp.views.calibration_report import write_calibration_report
+
+        write_calibration_report(args.report, result, source=args.samples, samples=samples)
     if args.json:
         print(json.dumps(calibration_to_dict(result), indent=2, allow_nan=False))
         hidden = tilt_not_identified(result)
@@ -112,6 +128,8 @@ def run(args: argparse.Namespace) -> int:
             out.print(f"calibration written to [bold]{output}[/bold]")
         else:
             out.print("calibration not written (give -o CALIBRATION.json to keep it)")
+        if args.report is not None:
+            out.print(f"report written to [bold]{args.report}[/bold]")
     print_warnings(w for w in result.warnings if w not in samples.warnings)
     return 0
 

@@ -4,10 +4,16 @@
 a few times a second): it rewrites one line on a terminal (``\\r``), e.g.
 ``1000 Hz | lost 3 | |F| 0.412 N | 1.2 / 2 s``. Off a terminal (a pipe, a log file, a test) it
 stays silent.
+
+:class:`PoseProgress` is a progress bar for work counted in steps (``record``: pose k of n, time
+left), on a terminal only.
+
+:func:`add_view_arguments` adds ``--log FILE.mcap`` and ``--view HOST:PORT`` to a live command.
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import sys
 import time
@@ -16,7 +22,38 @@ from typing import TYPE_CHECKING, TextIO
 if TYPE_CHECKING:
     from ftcomp.session.stream import StreamProgress
 
-__all__ = ["StatusLine"]
+__all__ = ["PoseProgress", "StatusLine", "add_view_arguments", "view_address"]
+
+#: The live view's address when ``--view`` names only a port (loopback: nothing outside the
+#: machine sees it unless asked).
+DEFAULT_VIEW_HOST = "127.0.0.1"
+
+
+def view_address(text: str) -> str:
+    """``HOST:PORT`` from ``--view``'s value (``PORT`` alone: on the loopback address)."""
+    host, _, port = text.rpartition(":")
+    if not port.isdigit() or not 0 < int(port) < 65536:
+        raise argparse.ArgumentTypeError(f"expected HOST:PORT with a port 1..65535, got {text!r}")
+    return f"{host or DEFAULT_VIEW_HOST}:{int(port)}"
+
+
+def add_view_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--log FILE.mcap`` and ``--view HOST:PORT`` (see docs/views.md)."""
+    parser.add_argument(
+        "--log",
+        metavar="FILE.mcap",
+        help="also write the session as MCAP (ROS 2 messages: wrenches, /tf, the controller's "
+        "error and command, load, events) for Foxglove, Lichtblick, rosbags, import-bag "
+        "(default: none)",
+    )
+    parser.add_argument(
+        "--view",
+        type=view_address,
+        metavar="HOST:PORT",
+        help="serve the session live over the Foxglove WebSocket protocol (open "
+        f"ws://HOST:PORT in Foxglove or Lichtblick; PORT alone: on {DEFAULT_VIEW_HOST}; "
+        "default: none)",
+    )
 
 
 class StatusLine:
@@ -60,3 +97,55 @@ class StatusLine:
         if self.shown:
             self.stream.write("\n")
             self.stream.flush()
+
+
+class PoseProgress:
+    """A progress bar of ``total`` steps with the time left, on stderr when it is a terminal
+    (silent in a pipe, a log file, a test). Lines printed meanwhile appear above it.
+
+    Args:
+        description: what is counted, e.g. ``"poses"``.
+        total: the steps planned.
+        stream: where to draw (stderr).
+    """
+
+    def __init__(self, description: str, total: int, stream: TextIO | None = None) -> None:
+        stream = stream if stream is not None else sys.stderr
+        self.enabled = stream.isatty()
+        self._progress = None
+        if not self.enabled:
+            return
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeRemainingColumn,
+        )
+
+        self._progress = Progress(
+            TextColumn("{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TextColumn("left"),
+            TimeRemainingColumn(),
+            console=Console(file=stream),
+            auto_refresh=False,  # redrawn at each step: no display thread
+            transient=True,
+        )
+        self._task = self._progress.add_task(description, total=total)
+        self._progress.start()
+        self._progress.refresh()
+
+    def advance(self, steps: int = 1) -> None:
+        """``steps`` more done."""
+        if self._progress is not None:
+            self._progress.advance(self._task, steps)
+            self._progress.refresh()
+
+    def close(self) -> None:
+        """Remove the bar (idempotent)."""
+        if self._progress is not None:
+            self._progress.stop()
+            self._progress = None

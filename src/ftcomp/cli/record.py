@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
+from ftcomp.cli.live_status import PoseProgress, add_view_arguments
 from ftcomp.errors import ParameterError
 
 if TYPE_CHECKING:
@@ -97,6 +98,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="orientation columns to write (default quaternion)",
     )
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
+    add_view_arguments(parser)
     parser.set_defaults(handler=run)
 
 
@@ -178,8 +180,11 @@ def run(args: argparse.Namespace) -> int:
     """Record; on a fault after the first pose, keep the file and say why."""
     from ftcomp.io.atomic import check_writable
     from ftcomp.session.record import RobotDriven, record
+    from ftcomp.views.live import session_observers
 
     check_writable(args.output, overwrite=args.force)  # before connecting to anything
+    if args.log is not None:
+        check_writable(args.log, overwrite=args.force, inputs=[args.output])
     config = _config(args)
     plan = config.plan
     if isinstance(plan, RobotDriven):
@@ -189,9 +194,24 @@ def run(args: argparse.Namespace) -> int:
         )
     else:
         intro = f"hold the arm still for {plan.still.still_s:g} s at each of {plan.n_poses} poses"
-    with open_hardware(args) as (robot, sensor, mount):
+    with (
+        session_observers(args.log, args.view, overwrite=args.force) as observers,
+        open_hardware(args) as (robot, sensor, mount),
+    ):
         print(intro, flush=True)
-        result = record(robot, sensor, config, mount=mount, on_event=lambda e: _announce(e, plan))
+        progress = PoseProgress("poses", plan.n_poses)
+
+        def on_event(event: PoseEvent) -> None:
+            _announce(event, plan)
+            if event.record is not None:
+                progress.advance()
+
+        try:
+            result = record(
+                robot, sensor, config, mount=mount, on_event=on_event, observers=observers
+            )
+        finally:
+            progress.close()
     summary = f"{result.output}: {result.poses_recorded} poses ({result.readings} readings)"
     if result.ended == "complete":
         print(f"wrote {summary}")

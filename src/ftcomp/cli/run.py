@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 
 from ftcomp.cli.common import warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
+from ftcomp.cli.live_status import add_view_arguments
 from ftcomp.errors import ParameterError
 
 if TYPE_CHECKING:
@@ -95,6 +96,7 @@ def register(parser: argparse.ArgumentParser) -> None:
     p("--dry-run", action="store_true", help="compute and log commands, send none")
     p("-o", "--output", required=True, metavar="RUN.csv", help="the log, one row per cycle")
     p("--force", action="store_true", help="replace an existing output file")
+    add_view_arguments(parser)
     parser.set_defaults(handler=run)
 
 
@@ -173,22 +175,39 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.io.calibration_json import load_calibration
     from ftcomp.session.online_load import event_lines
     from ftcomp.session.run import run_compliant
+    from ftcomp.views.live import session_observers
 
     _check(args)
     config = _config(args)
     output = check_writable(args.output, overwrite=args.force, inputs=[args.calibration])
+    if args.log is not None:
+        check_writable(args.log, overwrite=args.force, inputs=[args.calibration, args.output])
     calibration = load_calibration(args.calibration)
     warn_live_drift(calibration, args.calibration)
-    with open_hardware(args) as (robot, sensor, mount):
+    with (
+        session_observers(
+            args.log, args.view, overwrite=args.force, control_frame=args.frame
+        ) as observers,
+        open_hardware(args) as (robot, sensor, mount),
+    ):
         print(
             f"{'dry run' if args.dry_run else 'running'}: {args.law} admittance on "
             f"{args.axes} ({args.frame} frame), calibration {args.calibration}",
             flush=True,
         )
         result = run_compliant(
-            robot, sensor, calibration, config, output, mount=mount, source=args.calibration
+            robot,
+            sensor,
+            calibration,
+            config,
+            output,
+            mount=mount,
+            source=args.calibration,
+            observers=observers,
         )
     summary = f"{result.cycles} cycles in {result.duration_s:.2f} s, log {output}"
+    if args.log is not None:
+        summary += f", MCAP {args.log}"
     if result.cycles:
         t, e, window = result.travel_m * 1e3, result.final_error, config.settle
         window_s = window.hold_s if window is not None else 0.3

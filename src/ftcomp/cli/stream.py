@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 
 from ftcomp.cli.common import warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
-from ftcomp.cli.live_status import StatusLine
+from ftcomp.cli.live_status import StatusLine, add_view_arguments
 from ftcomp.errors import ParameterError
 
 #: How long the readings' rate is measured when --online-rate-hz is not given [s]: the value of
@@ -69,6 +69,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         "-o", "--output", required=True, metavar="LOG.csv", help="the log, one row per reading"
     )
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
+    add_view_arguments(parser)
     parser.set_defaults(handler=run)
 
 
@@ -87,6 +88,7 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.io.calibration_json import load_calibration
     from ftcomp.session.online_load import event_lines
     from ftcomp.session.stream import StreamConfig, stream
+    from ftcomp.views.live import session_observers
 
     if args.online_rate_hz is not None and not args.online_load:
         raise ParameterError("--online-rate-hz needs --online-load")
@@ -108,6 +110,8 @@ def run(args: argparse.Namespace) -> int:
     )
     inputs = [args.calibration] if args.calibration else []
     output = check_writable(args.output, overwrite=args.force, inputs=inputs)
+    if args.log is not None:
+        check_writable(args.log, overwrite=args.force, inputs=[*inputs, args.output])
     calibration = load_calibration(args.calibration) if args.calibration else None
     if calibration is not None:
         warn_live_drift(calibration, args.calibration)
@@ -124,7 +128,10 @@ def run(args: argparse.Namespace) -> int:
             )
 
     status = StatusLine()
-    with open_hardware(args, check_pose) as (robot, sensor, mount):
+    with (
+        session_observers(args.log, args.view, overwrite=args.force) as observers,
+        open_hardware(args, check_pose) as (robot, sensor, mount),
+    ):
         try:
             result = stream(
                 robot,
@@ -135,6 +142,7 @@ def run(args: argparse.Namespace) -> int:
                 mount=mount,
                 on_progress=status,
                 source=args.calibration or "",
+                observers=observers,
             )
         finally:
             status.close()

@@ -5,42 +5,183 @@ it is stopped: :class:`CsvLog` streams rows into a temporary file beside the tar
 it into place when the session ends, whatever ended it (a fault, Ctrl-C): what was logged is
 kept. The first column is a time stamp [s] written to the nanosecond; the others to
 ``digits`` significant digits (17: every float exactly, so a log replays bit for bit).
+
+A :class:`LogObserver` sees the same rows as they are written (an MCAP log, a live view): the
+session hands it every row with the row's stamp in integer nanoseconds on the session's clock,
+and events (a pose recorded, a grasp, the end and why). :class:`ObserverThread` runs observers
+off the control thread: the loop only puts the row on a queue, a worker thread serialises and
+publishes it, so a slow observer costs the loop no period. One thing still joins the two
+threads: the interpreter's lock. A worker busy in Python code (an MCAP chunk being indexed)
+gives it up only every :func:`sys.getswitchinterval` (5 ms by default, longer than a 500 Hz
+period), so while observers run the interval is lowered to :data:`SWITCH_INTERVAL_S`, and
+restored when they close.
 """
 
 from __future__ import annotations
 
 import contextlib
 import csv
+import queue
+import sys
+import threading
 from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import Protocol, runtime_checkable
 
 from ftcomp.io.atomic import atomic_output
 from ftcomp.io.timestamps import format_time
 
-__all__ = ["CsvLog", "csv_log"]
+__all__ = ["SWITCH_INTERVAL_S", "CsvLog", "LogObserver", "ObserverThread", "csv_log"]
+
+#: The interpreter's thread switch interval while observers run [s]: about the longest the
+#: control loop waits for the interpreter's lock when an observer is busy (a quarter of a
+#: 500 Hz period, against 5 ms by default; shorter makes the two threads trade the lock so
+#: often that the loop's own cycle grows, bench/bench_view.py).
+SWITCH_INTERVAL_S = 5e-4
+
+
+@runtime_checkable
+class LogObserver(Protocol):
+    """Sees a live session's log rows and events as they happen (an MCAP log, a live view).
+
+    ``open`` comes first with the log's columns, then ``row`` and ``event`` calls in the order
+    of the session, then ``close`` (also when a fault or Ctrl-C ended the session).
+    """
+
+    def open(self, columns: Sequence[str]) -> None:
+        """The log's columns (the rows' layout)."""
+
+    def row(self, t_ns: int, row: Sequence[float]) -> None:
+        """One log row as written, and its stamp [ns] on the session's clock."""
+
+    def event(self, t_ns: int, kind: str, text: str) -> None:
+        """Something happened at ``t_ns`` [ns]: ``kind`` (``"pose"``, ``"grasp"``,
+        ``"release"``, ``"contact"``, ``"end"``, ``"fault"``) and one line saying what."""
+
+    def close(self) -> None:
+        """The session ended: finish (idempotent)."""
+
+
+class ObserverThread:
+    """Runs observers on a worker thread: the caller's ``row`` only queues (a LogObserver).
+
+    The rows and events reach the observers in order; :meth:`close` waits until they have all
+    been handed on, closes the observers and raises the first error an observer raised (the
+    session itself goes on: a failing log is no reason to stop the arm). While it runs the
+    interpreter's switch interval is at most :data:`SWITCH_INTERVAL_S` (module docstring).
+    """
+
+    def __init__(self, observers: Sequence[LogObserver]) -> None:
+        self.observers = tuple(observers)
+        self._switch_s = sys.getswitchinterval()
+        sys.setswitchinterval(min(self._switch_s, SWITCH_INTERVAL_S))
+        self._queue: queue.SimpleQueue[tuple[str, tuple[object, ...]] | None] = queue.SimpleQueue()
+        self._error: BaseException | None = None
+        self._thread = threading.Thread(target=self._work, name="ftcomp-observers", daemon=True)
+        self._thread.start()
+        self._closed = False
+
+    def _work(self) -> None:
+        while True:
+            item = self._queue.get()
+            if item is None:
+                return
+            if self._error is not None:
+                continue  # drain: an observer failed, the rest is dropped
+            name, args = item
+            try:
+                for observer in self.observers:
+                    getattr(observer, name)(*args)
+            except BaseException as exc:  # handed to close(), raised on the caller's thread
+                self._error = exc
+
+    def open(self, columns: Sequence[str]) -> None:
+        """Queue the columns."""
+        self._queue.put(("open", (tuple(columns),)))
+
+    def row(self, t_ns: int, row: Sequence[float]) -> None:
+        """Queue one row (the caller must not change ``row`` afterwards)."""
+        self._queue.put(("row", (t_ns, row)))
+
+    def event(self, t_ns: int, kind: str, text: str) -> None:
+        """Queue an event."""
+        self._queue.put(("event", (t_ns, kind, text)))
+
+    def close(self) -> None:
+        """Hand on what is queued, close the observers, raise an observer's error."""
+        if self._closed:
+            return
+        self._closed = True
+        self._queue.put(None)  # the end
+        self._thread.join()
+        sys.setswitchinterval(self._switch_s)
+        errors: list[BaseException] = [] if self._error is None else [self._error]
+        for observer in self.observers:
+            try:
+                observer.close()
+            except BaseException as exc:
+                errors.append(exc)
+        if errors:
+            raise errors[0]
 
 
 class CsvLog:
-    """Writes rows of ``columns`` (see :func:`csv_log`); ``rows`` counts them."""
+    """Writes rows of ``columns`` (see :func:`csv_log`); ``rows`` counts them.
 
-    def __init__(self, handle: object, columns: Sequence[str], digits: int) -> None:
+    Args:
+        handle: the open text file.
+        columns: the header.
+        digits: significant digits of the numbers after the first column.
+        observer: also sees every row (after it is written).
+    """
+
+    def __init__(
+        self,
+        handle: object,
+        columns: Sequence[str],
+        digits: int,
+        observer: LogObserver | None = None,
+    ) -> None:
         self._writer = csv.writer(handle, lineterminator="\n")  # type: ignore[arg-type]
         self._writer.writerow(columns)
         self._format = f"{{:.{digits}g}}".format
         self.columns = tuple(columns)
         self.rows = 0
+        self.observer = observer
 
-    def write(self, row: Sequence[float]) -> None:
-        """One row: its first value a time stamp [s], the others numbers."""
+    def write(self, row: Sequence[float], t_ns: int | None = None) -> None:
+        """One row: its first value a time stamp [s], the others numbers; ``t_ns``: the row's
+        exact stamp [ns] for the observer (default: the first value in nanoseconds)."""
         fmt = self._format
         self._writer.writerow([format_time(row[0]), *(fmt(v) for v in row[1:])])
         self.rows += 1
+        if self.observer is not None:
+            self.observer.row(round(row[0] * 1e9) if t_ns is None else t_ns, row)
+
+    def event(self, t_ns: int, kind: str, text: str) -> None:
+        """Tell the observer of an event (see :meth:`LogObserver.event`); no row is written."""
+        if self.observer is not None:
+            self.observer.event(t_ns, kind, text)
 
 
 @contextlib.contextmanager
-def csv_log(path: Path, columns: Sequence[str], *, digits: int = 10) -> Iterator[CsvLog]:
+def csv_log(
+    path: Path,
+    columns: Sequence[str],
+    *,
+    digits: int = 10,
+    observers: Sequence[LogObserver] = (),
+) -> Iterator[CsvLog]:
     """Open ``path`` as a :class:`CsvLog`, renamed into place when the block ends; on an
     exception out of the block nothing replaces ``path`` (a session catches its loop's faults
-    inside the block, so what it logged is kept)."""
-    with atomic_output(path) as tmp, tmp.open("w", encoding="utf-8", newline="") as handle:
-        yield CsvLog(handle, columns, digits)
+    inside the block, so what it logged is kept). ``observers`` see every row too, on an
+    :class:`ObserverThread` (opened here, closed when the block ends)."""
+    thread = ObserverThread(observers) if observers else None
+    try:
+        with atomic_output(path) as tmp, tmp.open("w", encoding="utf-8", newline="") as handle:
+            if thread is not None:
+                thread.open(columns)
+            yield CsvLog(handle, columns, digits, thread)
+    finally:
+        if thread is not None:
+            thread.close()

@@ -22,7 +22,7 @@ nothing to keep.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal, get_args
@@ -34,12 +34,13 @@ from scipy.spatial.transform import Rotation
 from ftcomp.arrays import freeze_field
 from ftcomp.control.loop import ControlCycle, run_loop
 from ftcomp.errors import FtcompError, ParameterError
-from ftcomp.frames import OrientationEncoding
+from ftcomp.frames import OrientationEncoding, quat_from_matrix
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.samples_csv import write_samples
 from ftcomp.samples import PoseList, Samples
 from ftcomp.session.hand_guided import ManualRecorder, StillCriteria
+from ftcomp.session.log import LogObserver, ObserverThread
 from ftcomp.session.pose_record import (
     PoseEvent,
     PoseRecord,
@@ -48,6 +49,7 @@ from ftcomp.session.pose_record import (
     samples_from_records,
 )
 from ftcomp.session.robot_driven import record_poses
+from ftcomp.session.stream import stream_columns
 
 __all__ = ["HandGuided", "RecordConfig", "RecordResult", "RobotDriven", "record"]
 
@@ -229,6 +231,19 @@ class _SampleFile:
         )
 
 
+#: The rows an observer of a recording sees: one per reading, as a stream with a pose logs it.
+OBSERVED_COLUMNS = stream_columns(with_pose=True, compensated=False)
+
+
+def _observe(thread: ObserverThread, record: PoseRecord, number: int, planned: int) -> None:
+    """Hand a recorded pose's readings to the observers, then the event."""
+    pose = [*quat_from_matrix(record.R_base_sensor), *record.p_base_sensor.tolist()]
+    for t_ns, w in zip(record.t_ns.tolist(), record.wrench_sensor.tolist(), strict=True):
+        thread.row(t_ns, [t_ns * 1e-9, *w, *pose])
+    text = f"pose {number} of {planned} recorded ({record.pose_id})"
+    thread.event(int(record.t_ns[-1]), "pose", text)
+
+
 def _stop(robot: Robot) -> str:
     """Stop the robot; what went wrong doing so, or "" (after a fault the link may be gone)."""
     try:
@@ -245,6 +260,7 @@ def record(
     *,
     mount: Mount | None = None,
     on_event: Callable[[PoseEvent], None] | None = None,
+    observers: Sequence[LogObserver] = (),
 ) -> RecordResult:
     """Run a recording session (module docstring) and write its sample file as it goes.
 
@@ -256,6 +272,8 @@ def record(
         on_event: called with every :class:`~ftcomp.session.pose_record.PoseEvent` (a pose
             recorded, once it is in the file; a hand-guided still period ignored), e.g. to
             announce it.
+        observers: see every recorded reading as a row (:data:`OBSERVED_COLUMNS`, once its
+            pose is in the file) and the events (each pose, the end), on a worker thread.
 
     Returns:
         The :class:`RecordResult`; on Ctrl-C or a fault after the first pose, with ``ended``
@@ -271,9 +289,15 @@ def record(
     file = _SampleFile(output, config.encoding)
     plan = config.plan
 
+    thread = ObserverThread(observers) if observers else None
+    if thread is not None:
+        thread.open(OBSERVED_COLUMNS)
+
     def recorded(event: PoseEvent) -> None:
         if event.record is not None:
             file.add(event.record)
+            if thread is not None:
+                _observe(thread, event.record, len(file.records), plan.n_poses)
         if on_event is not None:
             on_event(event)
 
@@ -282,6 +306,36 @@ def record(
         recorded(PoseEvent("recorded", len(file.records) + 1, angle, record))
 
     start = time.monotonic()
+    ended: Ending = "fault"
+    reason = "the session failed before its first pose"  # unless _run_plan returns
+    try:
+        ended, reason = _run_plan(robot, sensor, plan, mount, driven, recorded, file)
+    finally:
+        if thread is not None:
+            last_ns = int(file.records[-1].t_ns[-1]) if file.records else 0
+            thread.event(last_ns, "end" if ended == "complete" else "fault", reason or ended)
+            thread.close()
+    return RecordResult(
+        output=output,
+        ended=ended,
+        reason=reason,
+        records=tuple(file.records),
+        samples=file.samples,
+        poses_planned=plan.n_poses,
+        duration_s=time.monotonic() - start,
+    )
+
+
+def _run_plan(
+    robot: Robot,
+    sensor: WrenchSensor,
+    plan: RobotDriven | HandGuided,
+    mount: Mount,
+    driven: Callable[[PoseRecord], None],
+    recorded: Callable[[PoseEvent], None],
+    file: _SampleFile,
+) -> tuple[Ending, str]:
+    """Record the plan; how it ended and why (see :func:`record`), the robot stopped."""
     ended: Ending = "complete"
     reason = ""
     try:
@@ -323,12 +377,4 @@ def record(
         ended, reason = (
             ("fault", stopped) if ended == "complete" else (ended, f"{reason}; {stopped}")
         )
-    return RecordResult(
-        output=output,
-        ended=ended,
-        reason=reason,
-        records=tuple(file.records),
-        samples=file.samples,
-        poses_planned=plan.n_poses,
-        duration_s=time.monotonic() - start,
-    )
+    return ended, reason

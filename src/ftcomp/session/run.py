@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -45,7 +46,7 @@ from ftcomp.hardware.protocols import Mount, Robot, TakesControl, WrenchSensor
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
 from ftcomp.session.compliant import CompliantStep, CycleRecord, SettleRule
-from ftcomp.session.log import csv_log
+from ftcomp.session.log import CsvLog, LogObserver, csv_log
 from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, LoadTracker, require_tool_weight
 
 __all__ = [
@@ -269,6 +270,21 @@ class _Summary:
         return (self.t_ns - self.t0_ns) * 1e-9, self.p - self.p0, final
 
 
+def _tell_end(
+    log: CsvLog,
+    t0_ns: int,
+    end_ns: int,
+    load: LoadTracker | None,
+    outcome: str,
+    message: str,
+) -> None:
+    """The run's events for its observers: the online load's, then how it ended."""
+    for event in load.events if load is not None else []:
+        log.event(t0_ns + round(event.confirmed_t_s * 1e9), event.kind, event.describe())
+    kind = "end" if outcome in ("duration", "settled") else "fault"
+    log.event(end_ns, kind, f"{outcome}: {message}" if message else outcome)
+
+
 def run_compliant(
     robot: Robot,
     sensor: WrenchSensor,
@@ -278,6 +294,7 @@ def run_compliant(
     *,
     mount: Mount | None = None,
     source: str = "the calibration",
+    observers: Sequence[LogObserver] = (),
 ) -> RunResult:
     """Run the compliant loop until the run ends; the robot is stopped on any exit.
 
@@ -294,6 +311,8 @@ def run_compliant(
             checks it may be written.
         mount: the sensor frame on the TCP (identity by default).
         source: names the calibration in errors.
+        observers: see every log row (stamped with the cycle's ``now_ns``) and the events (the
+            online load's, the end and why), on a worker thread (an MCAP log, a live view).
 
     Returns:
         The result; a fault, a lost connection or Ctrl-C end the run with the robot stopped
@@ -319,7 +338,7 @@ def run_compliant(
     columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if load is not None else RUN_COLUMNS
     summary = _Summary(config.settle.hold_s if config.settle is not None else 0.3)
     outcome, message = "", ""
-    with csv_log(log_path, columns, digits=17) as log:
+    with csv_log(log_path, columns, digits=17, observers=observers) as log:
         t0_ns: list[int] = []
 
         def on_cycle(record: CycleRecord) -> None:
@@ -340,7 +359,7 @@ def run_compliant(
             ]
             if load is not None:
                 row += load.update(t_s)
-            log.write(row)
+            log.write(row, r.now_ns)
             summary.add(record)
 
         step = CompliantStep(
@@ -359,10 +378,12 @@ def run_compliant(
             outcome, message = "interrupted", "interrupted (Ctrl-C)"
         except FtcompError as exc:
             outcome, message = "error", str(exc)
-    if not message and outcome == "loop_late":
-        message = f"loop late: the robot missed {config.max_late_cycles} periods in a row"
-    elif not message and step.faulted:
-        message = f"protective stop: {outcome}"
+        if not message and outcome == "loop_late":
+            message = f"loop late: the robot missed {config.max_late_cycles} periods in a row"
+        elif not message and step.faulted:
+            message = f"protective stop: {outcome}"
+        if observers:
+            _tell_end(log, t0_ns[0] if t0_ns else 0, summary.t_ns, load, outcome, message)
     duration_s, travel_m, final_error = summary.figures()
     return RunResult(
         outcome=outcome,

@@ -37,7 +37,7 @@ from ftcomp.hardware.protocols import (
 from ftcomp.hardware.replay import EndOfReplayError
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
-from ftcomp.session.log import csv_log
+from ftcomp.session.log import LogObserver, csv_log
 from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, StreamLoad, require_tool_weight
 
 __all__ = [
@@ -239,6 +239,7 @@ def stream(
     mount: Mount | None = None,
     on_progress: Callable[[StreamProgress], None] | None = None,
     source: str = "the calibration",
+    observers: Sequence[LogObserver] = (),
 ) -> StreamResult:
     """Log the sensor's readings until the duration is up (see the module docstring).
 
@@ -251,6 +252,8 @@ def stream(
         mount: the sensor frame on the TCP (identity by default).
         on_progress: called every ``config.progress_period_s`` with where the stream is.
         source: names the calibration in errors.
+        observers: see every log row (stamped with the reading's ``t_ns``) and the events (the
+            online load's, the end and why), on a worker thread (an MCAP log, a live view).
 
     Raises:
         ParameterError: compensation or a pose asked of a robot that reports none, or an online
@@ -277,7 +280,7 @@ def stream(
     )
     lost = sensor if isinstance(sensor, CountsLostPackets) else None
     outcome, message = "duration", ""
-    with csv_log(log_path, columns) as log:
+    with csv_log(log_path, columns, observers=observers) as log:
         logger = StreamLogger(
             sensor,
             log.write,
@@ -318,6 +321,11 @@ def stream(
             outcome, message = "error", str(exc)
         finally:
             logger.finish()
+        t0_ns = logger.t0_ns if logger.t0_ns is not None else 0
+        for event in online.events if online is not None else []:  # stamped like the rows
+            log.event(round(event.confirmed_t_s * 1e9), event.kind, event.describe())
+        end_ns = t0_ns + round(logger.elapsed_s * 1e9)
+        log.event(end_ns, "fault" if message else "end", message or outcome)
     health = sensor.stream_health() if isinstance(sensor, ReportsStreamHealth) else None
     return StreamResult(
         outcome=outcome,
