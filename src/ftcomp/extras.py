@@ -21,10 +21,16 @@ EXTRAS: dict[str, tuple[str, ...]] = {
     "report": ("matplotlib",),
     "sim": ("mujoco",),
     "urdf": ("pytransform3d",),
+    "view": ("foxglove",),
 }
 
 #: How a message names each optional module.
-_DISPLAY_NAME = {"mujoco": "MuJoCo", "matplotlib": "matplotlib", "pytransform3d": "pytransform3d"}
+_DISPLAY_NAME = {
+    "foxglove": "foxglove-sdk",
+    "matplotlib": "matplotlib",
+    "mujoco": "MuJoCo",
+    "pytransform3d": "pytransform3d",
+}
 
 
 def _importable(module: str) -> bool:
