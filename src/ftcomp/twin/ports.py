@@ -18,6 +18,7 @@ from __future__ import annotations
 import socket
 import struct
 import threading
+import time
 from collections.abc import Callable, Sequence
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Final
@@ -152,9 +153,13 @@ class NetFtServer:
         http: the bound TCP socket for the configuration page (port 80).
     """
 
-    def __init__(self, sock: socket.socket, http: socket.socket) -> None:
+    def __init__(self, sock: socket.socket, http: socket.socket, rate_hz: float) -> None:
         self.sock = sock
+        self.rate_hz = rate_hz
         self.lock = threading.Lock()
+        self.ready = threading.Condition()
+        self.queue: list[tuple[list[int], int]] = []
+        self.closed = False
         self.peer: tuple[str, int] | None = None
         self.remaining = 0  # records left of a finite request (0: without end)
         self.rdt_sequence = 0
@@ -192,6 +197,7 @@ class NetFtServer:
         http.listen(8)
         threading.Thread(target=self.http.serve_forever, daemon=True).start()
         threading.Thread(target=self._listen, daemon=True).start()
+        threading.Thread(target=self._sender, daemon=True).start()
 
     def _listen(self) -> None:
         while True:
@@ -215,39 +221,61 @@ class NetFtServer:
                     self.bias_requested = True
 
     def push(self, counts: Sequence[Sequence[int]], status: int = 0) -> None:
-        """Send one record per new sensor sample (counts, before the software bias).
+        """Queue the new sensor samples (counts, before the software bias): the sender thread
+        sends them one record each, evenly spaced at the sensor's rate, as the device does
+        (not in bursts of a physics cycle)."""
+        with self.ready:
+            self.queue.extend((list(c), status) for c in counts)
+            self.ready.notify()
 
-        In buffered mode the records go out 40 at a time (the Net F/T's default batch).
-        """
+    def _sender(self) -> None:
+        period = 1.0 / self.rate_hz
+        due = time.monotonic()
+        while not self.closed:
+            with self.ready:
+                while not self.queue and not self.closed:
+                    self.ready.wait(0.1)
+                if self.closed:
+                    return
+                sample, status = self.queue.pop(0)
+                if len(self.queue) > 8:  # far behind: drop the backlog's pacing
+                    due = time.monotonic()
+            self._send_sample(sample, status)
+            due = max(due + period, time.monotonic() - 4 * period)
+            wait = due - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+
+    def _send_sample(self, sample: list[int], status: int) -> None:
+        """One record to the streaming client (with the bias, losses and freezes applied)."""
         with self.lock:
-            for sample in counts:
-                self.ft_sequence += 1
-                if self.bias_requested:
-                    self.bias, self.bias_requested = list(sample), False
-                if self.peer is None:
-                    continue
-                self.rdt_sequence += 1
-                values = self.frozen if self.frozen is not None else sample
-                record = _RECORD.pack(
-                    self.rdt_sequence,
-                    self.ft_sequence,
-                    status,
-                    *(c - b for c, b in zip(values, self.bias, strict=True)),
-                )
-                if self.lose_next > 0:
-                    self.lose_next -= 1
-                    continue
-                if self.buffered:
-                    self.batch.append(record)
-                    if len(self.batch) >= 40:
-                        self._send(b"".join(self.batch))
-                        self.batch = []
-                else:
-                    self._send(record)
-                if self.remaining:
-                    self.remaining -= 1
-                    if self.remaining == 0:
-                        self.peer = None
+            self.ft_sequence += 1
+            if self.bias_requested:
+                self.bias, self.bias_requested = list(sample), False
+            if self.peer is None:
+                return
+            self.rdt_sequence += 1
+            values = self.frozen if self.frozen is not None else sample
+            record = _RECORD.pack(
+                self.rdt_sequence,
+                self.ft_sequence,
+                status,
+                *(c - b for c, b in zip(values, self.bias, strict=True)),
+            )
+            if self.lose_next > 0:
+                self.lose_next -= 1
+                return
+            if self.buffered:
+                self.batch.append(record)
+                if len(self.batch) >= 40:
+                    self._send(b"".join(self.batch))
+                    self.batch = []
+            else:
+                self._send(record)
+            if self.remaining:
+                self.remaining -= 1
+                if self.remaining == 0:
+                    self.peer = None
 
     def _send(self, data: bytes) -> None:
         if self.peer is None:
@@ -260,6 +288,9 @@ class NetFtServer:
 
     def close(self) -> None:
         """Stop serving."""
+        with self.ready:
+            self.closed = True
+            self.ready.notify()
         self.http.shutdown()
         self.http.server_close()
         self.sock.close()
