@@ -97,7 +97,8 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"twin served {result.cycles} cycles ({result.late_cycles} late), "
         f"{result.rtde_packets} RTDE packages, {result.rdt_records} RDT records; "
-        f"step p50 {result.step_us_p50:.0f} us, p99 {result.step_us_p99:.0f} us; "
+        f"step p50 {result.step_us_p50:.0f} us, p99 {result.step_us_p99:.0f} us"
+        f"{'' if result.realtime else ' (no real-time priority)'}; "
         f"ended by {result.reason}",
         flush=True,
     )

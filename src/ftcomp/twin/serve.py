@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import dataclasses
 import ipaddress
 import math
 import signal
@@ -46,18 +47,15 @@ from ftcomp.sim.cell import SimCell
 from ftcomp.sim.sensor import SensorSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS
 from ftcomp.twin.controller import UrController
-from ftcomp.twin.ports import (
+from ftcomp.twin.netft import (
     COUNTS_PER_FORCE,
     COUNTS_PER_TORQUE,
-    DASHBOARD_PORT,
-    NETFT_HTTP_PORT,
-    RDT_PORT,
-    SCRIPT_PORTS,
+    RT_PRIORITY,
     SERIOUS_STATUS,
-    NetFtServer,
-    serve_dashboard,
-    serve_script,
+    NetFtProcess,
+    realtime_priority,
 )
+from ftcomp.twin.ports import DASHBOARD_PORT, SCRIPT_PORTS, serve_dashboard, serve_script
 from ftcomp.twin.rtde import RtdeSession
 
 __all__ = ["FAULTS", "ROBOTS", "TwinConfig", "TwinResult", "serve_twin"]
@@ -180,6 +178,7 @@ class TwinResult:
         rdt_records: RDT records sent.
         step_us_p50, step_us_p99: the cycle's compute time [us], percentiles.
         reason: why it ended (``time``, ``signal``).
+        realtime: whether the loop got real-time priority (SCHED_FIFO).
     """
 
     cycles: int
@@ -189,6 +188,7 @@ class TwinResult:
     step_us_p50: float
     step_us_p99: float
     reason: str
+    realtime: bool = False
 
 
 def _bind(host: str, port: int, kind: int = socket.SOCK_STREAM) -> socket.socket:
@@ -212,11 +212,8 @@ def _bound(config: TwinConfig) -> Iterator[dict[str, socket.socket]]:
         ports["dashboard"] = _bind(config.robot_host, DASHBOARD_PORT)
         for port in SCRIPT_PORTS:
             ports[f"script{port}"] = _bind(config.robot_host, port)
-        ports["rdt"] = _bind(config.sensor_host, RDT_PORT, socket.SOCK_DGRAM)
-        ports["http"] = _bind(config.sensor_host, NETFT_HTTP_PORT)
-        for name, sock in ports.items():
-            if name not in ("rdt", "http"):
-                sock.listen(8)
+        for sock in ports.values():
+            sock.listen(8)
         yield ports
     finally:
         for sock in ports.values():
@@ -231,14 +228,21 @@ def _pose6(p: np.ndarray, R: np.ndarray) -> list[float]:
 class _Twin:
     """The running twin: the cell, the controller, the clients."""
 
-    def __init__(self, config: TwinConfig, cell: SimCell, ports: dict[str, socket.socket]):
+    def __init__(
+        self,
+        config: TwinConfig,
+        cell: SimCell,
+        ports: dict[str, socket.socket],
+        netft: NetFtProcess,
+    ):
         self.config = config
         self.cell = cell
         self.controller = UrController(cell, _CYCLE_S)
         self.sessions: list[RtdeSession] = []
         self.sessions_lock = threading.Lock()
         self.packets_closed = 0
-        self.netft = NetFtServer(ports["rdt"], ports["http"], SensorSpec().output_rate_Hz)
+        self.netft = netft
+        self.sensor_streaming = False
         self.started_at: float | None = None
         self.fault_fired = False
         self.rtde_silent = False
@@ -269,16 +273,14 @@ class _Twin:
         fault = self.config.fault
         if fault is None or self.fault_fired:
             return
-        streaming = any(s.started for s in self.sessions) or self.netft.peer is not None
+        streaming = any(s.started for s in self.sessions)
         if self.started_at is None and streaming:
             self.started_at = now
         if self.started_at is None or now - self.started_at < self.config.fault_at_s:
             return
         self.fault_fired = True
-        if fault == "sensor-frozen":
-            self.netft.frozen = self._last_counts
-        elif fault == "rdt-loss":
-            self.netft.lose_next = 200
+        if fault in ("sensor-frozen", "rdt-loss"):
+            self.netft.inject(fault)
         elif fault == "rtde-stop":
             self.rtde_silent = True
         elif fault == "protective-stop":
@@ -287,8 +289,6 @@ class _Twin:
             self.controller.stop_program()
         elif fault == "latency":
             self.latency = True
-
-    _last_counts: list[int] | None = None
 
     def state(self) -> dict[str, object]:
         cell, ctl = self.cell, self.controller
@@ -330,8 +330,15 @@ class _Twin:
 
     _last_wrench: list[float] | None = None
 
+    def finish(self, result: TwinResult) -> TwinResult:
+        """Stop the program and the Net F/T; the result with the records it sent."""
+        self.controller.stop_program()
+        self.netft.close()
+        return dataclasses.replace(result, rdt_records=self.netft.sent)
+
     def run(self, seconds: float, stop: threading.Event, log: Any) -> TwinResult:
         cell, ctl = self.cell, self.controller
+        realtime = realtime_priority(RT_PRIORITY + 2)
         steps: list[float] = []
         late = cycles = 0
         start = time.monotonic()
@@ -359,7 +366,6 @@ class _Twin:
                 for s in samples
             ]
             if counts:
-                self._last_counts = counts[-1]
                 self._last_wrench = samples[-1].wrench_sensor.tolist()
             status = (
                 SERIOUS_STATUS if self.fault_fired and self.config.fault == "sensor-fault" else 0
@@ -399,10 +405,11 @@ class _Twin:
             cycles=cycles,
             late_cycles=late,
             rtde_packets=self.packets_closed + sum(s.packets for s in self.sessions),
-            rdt_records=self.netft.sent,
+            rdt_records=0,
             step_us_p50=float(np.percentile(us, 50)),
             step_us_p99=float(np.percentile(us, 99)),
             reason=reason,
+            realtime=realtime,
         )
 
 
@@ -423,7 +430,8 @@ def serve_twin(
     cell = open_sim_robot(parse_uri(config.sim_uri()))
     assert isinstance(cell, SimCell)
     with _bound(config) as ports:
-        twin = _Twin(config, cell, ports)
+        netft = NetFtProcess(config.sensor_host, SensorSpec().output_rate_Hz)
+        twin = _Twin(config, cell, ports, netft)
         if config.truth_path is not None:
             import json
 
@@ -440,7 +448,7 @@ def serve_twin(
                 f"twin ready: robot ur://{config.robot_host} sensor netft://{config.sensor_host}"
             )
             if config.contact_log_path is None:
-                return twin.run(config.seconds, stop, None)
+                return twin.finish(twin.run(config.seconds, stop, None))
             with atomic_output(config.contact_log_path) as tmp, open(tmp, "w", newline="") as f:
                 log = csv.writer(f)
                 log.writerow(
@@ -461,9 +469,10 @@ def serve_twin(
                         "safety",
                     ]
                 )
-                return twin.run(config.seconds, stop, log)
+                return twin.finish(twin.run(config.seconds, stop, log))
         finally:
             twin.controller.stop_program()
-            twin.netft.close()
+            if twin.netft.proc.is_alive():
+                twin.netft.close()
             for sig, handler in previous.items():
                 signal.signal(sig, handler)
