@@ -8,10 +8,10 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from ftcomp.hardware.registry import parse_uri  # noqa: E402
-from ftcomp.session.verdicts import judge_placement  # noqa: E402
-from ftcomp.sim.backend import open_robot  # noqa: E402
-from ftcomp.sim.cell import SimCell  # noqa: E402
+from ftcomp.hardware.registry import parse_uri
+from ftcomp.session.verdicts import judge_placement
+from ftcomp.sim.backend import open_robot
+from ftcomp.sim.cell import SimCell
 
 WEIGHT_N = 4.905
 PLACE = "sim://?seed=4&tilt_deg=0,0&surface=sponge&load_kg=0.5&grasp=1&clearance_mm=2"
