@@ -70,6 +70,7 @@ LAYERS: dict[str, int] = {
     "ftcomp.huang2020": 8,
 }
 
+
 @dataclass(frozen=True)
 class Import:
     """One import: ``importer`` imports the module ``target`` (and from it ``name``, if any)."""
