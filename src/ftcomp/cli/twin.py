@@ -67,6 +67,11 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--fault-at-s", type=float, default=1.0, help="after the first stream starts [s]"
     )
+    parser.add_argument(
+        "--no-realtime",
+        action="store_true",
+        help="do not ask for real-time priority (default: SCHED_FIFO where allowed)",
+    )
     parser.set_defaults(handler=run)
 
 
@@ -92,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
         contact_log_path=Path(args.contact_log) if args.contact_log else None,
         fault=args.fault,
         fault_at_s=args.fault_at_s,
+        realtime=not args.no_realtime,
     )
     result = serve_twin(config, lambda line: print(line, flush=True))
     print(

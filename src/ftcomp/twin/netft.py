@@ -71,8 +71,11 @@ class NetFtServer:
         http: the bound TCP socket for the configuration page (port 80).
     """
 
-    def __init__(self, sock: socket.socket, http: socket.socket, rate_hz: float) -> None:
+    def __init__(
+        self, sock: socket.socket, http: socket.socket, rate_hz: float, realtime: bool = False
+    ) -> None:
         self.sock = sock
+        self.realtime = realtime
         self.rate_hz = rate_hz
         self.lock = threading.Lock()
         self.ready = threading.Condition()
@@ -157,7 +160,8 @@ class NetFtServer:
             self.ready.notify()
 
     def _sender(self) -> None:
-        realtime_priority(RT_PRIORITY + 1)
+        if self.realtime:
+            realtime_priority(RT_PRIORITY + 1)
         period = 1.0 / self.rate_hz
         due = time.monotonic()
         while not self.closed:
@@ -254,7 +258,7 @@ def _bind(host: str, port: int, kind: int) -> socket.socket:
     return sock
 
 
-def _child(host: str, rate_hz: float, conn: Connection) -> None:
+def _child(host: str, rate_hz: float, realtime: bool, conn: Connection) -> None:
     """The Net F/T process: bind, say so, then serve what the cell's loop sends."""
     try:
         rdt = _bind(host, RDT_PORT, socket.SOCK_DGRAM)
@@ -266,7 +270,7 @@ def _child(host: str, rate_hz: float, conn: Connection) -> None:
     except ParameterError as exc:
         conn.send(("error", str(exc)))
         return
-    server = NetFtServer(rdt, http, rate_hz)
+    server = NetFtServer(rdt, http, rate_hz, realtime)
     conn.send(("bound", ""))
     try:
         while True:
@@ -293,15 +297,18 @@ class NetFtProcess:
     Args:
         host: its loopback address.
         rate_hz: the sensor's output rate [Hz].
+        realtime: ask for SCHED_FIFO for the sender.
 
     Raises:
         ParameterError: a port cannot be bound (nothing is left bound).
     """
 
-    def __init__(self, host: str, rate_hz: float) -> None:
+    def __init__(self, host: str, rate_hz: float, realtime: bool) -> None:
         context = multiprocessing.get_context("spawn")
         self.conn, child_conn = context.Pipe()
-        self.proc = context.Process(target=_child, args=(host, rate_hz, child_conn), daemon=True)
+        self.proc = context.Process(
+            target=_child, args=(host, rate_hz, realtime, child_conn), daemon=True
+        )
         self.proc.start()
         child_conn.close()
         if not self.conn.poll(30.0):

@@ -30,7 +30,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
 
@@ -96,7 +96,8 @@ class TwinConfig:
         truth_path: write the true tool, bias, tilt and mount here (JSON), or None.
         contact_log_path: write the contact log here (CSV), or None.
         fault: a fault of :data:`FAULTS` to inject, or None.
-        fault_at_s: when, after the first RTDE or RDT client started streaming [s].
+        fault_at_s: when, after the first RTDE client started streaming [s].
+        realtime: ask for SCHED_FIFO for the loop and the Net F/T's sender (as ur_rtde does).
     """
 
     robot_host: str
@@ -114,7 +115,7 @@ class TwinConfig:
     contact_log_path: Path | None = None
     fault: str | None = None
     fault_at_s: float = 1.0
-    extra: dict[str, str] = field(default_factory=dict)
+    realtime: bool = True
 
     def __post_init__(self) -> None:
         for name in ("robot_host", "sensor_host"):
@@ -338,7 +339,7 @@ class _Twin:
 
     def run(self, seconds: float, stop: threading.Event, log: Any) -> TwinResult:
         cell, ctl = self.cell, self.controller
-        realtime = realtime_priority(RT_PRIORITY + 2)
+        realtime = self.config.realtime and realtime_priority(RT_PRIORITY + 2)
         steps: list[float] = []
         late = cycles = 0
         start = time.monotonic()
@@ -358,8 +359,10 @@ class _Twin:
             twist = ctl.cycle(float(np.linalg.norm(w_contact[:3])))
             cell.command_twist(twist)
             cell.wait_cycle()
-            cell.wait_cycle()
+            # Read after each 1 ms: at 1200 Hz most reads then see one new tick (the cheap path).
             samples = cell.sensor.read_new()
+            cell.wait_cycle()
+            samples += cell.sensor.read_new()
             counts = [
                 [round(v * COUNTS_PER_FORCE) for v in s.wrench_sensor[:3]]
                 + [round(v * COUNTS_PER_TORQUE) for v in s.wrench_sensor[3:]]
@@ -430,7 +433,7 @@ def serve_twin(
     cell = open_sim_robot(parse_uri(config.sim_uri()))
     assert isinstance(cell, SimCell)
     with _bound(config) as ports:
-        netft = NetFtProcess(config.sensor_host, SensorSpec().output_rate_Hz)
+        netft = NetFtProcess(config.sensor_host, SensorSpec().output_rate_Hz, config.realtime)
         twin = _Twin(config, cell, ports, netft)
         if config.truth_path is not None:
             import json
