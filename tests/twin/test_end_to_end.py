@@ -18,7 +18,7 @@ pytest.importorskip("rtde_control")
 pytest.importorskip("pynetft")
 pytest.importorskip("mujoco")
 
-from standins.twin_process import running_twin  # noqa: E402
+from standins.twin_process import running_twin
 
 TILT = "--tilt-deg=-0.204,-0.129"
 LOAD_WEIGHT_N = 0.5 * 9.81
