@@ -48,24 +48,44 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
     parser.add_argument("--robot-host", required=True, help="loopback address of the robot")
     parser.add_argument("--sensor-host", required=True, help="loopback address of the Net F/T")
-    parser.add_argument("--seconds", type=float, default=3600.0, help="serve this long [s]")
-    parser.add_argument("--robot", default="ur5e", help="the robot answered as (ur5e)")
-    parser.add_argument("--load-kg", type=float, help="a load held in the gripper [kg]")
-    parser.add_argument("--surface", default="none", help="none | sponge | book")
     parser.add_argument(
-        "--clearance-mm", type=float, default=5.0, help="start the load this far above [mm]"
+        "--seconds", type=float, default=3600.0, help="serve this long [s] (default 3600)"
     )
-    parser.add_argument("--tilt-deg", default="0,0", help="base tilt U,V [deg]")
-    parser.add_argument("--seed", type=int, default=0, help="sensor noise seed")
+    parser.add_argument("--robot", default="ur5e", help="the robot answered as (default ur5e)")
     parser.add_argument(
-        "--gain-error-percent", type=float, default=0.0, help="sensor gain error [%%]"
+        "--load-kg", type=float, help="a load held in the gripper [kg] (default: none)"
     )
-    parser.add_argument("--drift-N-per-min", default="0,0,0", help="force-bias drift x,y,z [N/min]")
-    parser.add_argument("--truth", metavar="FILE", help="write the true tool, bias, tilt, mount")
-    parser.add_argument("--contact-log", metavar="FILE", help="write the contact log (CSV)")
-    parser.add_argument("--fault", choices=_FAULTS, help="inject this fault on demand")
+    parser.add_argument("--surface", default="none", help="none | sponge | book (default none)")
     parser.add_argument(
-        "--fault-at-s", type=float, default=1.0, help="after the first stream starts [s]"
+        "--clearance-mm",
+        type=float,
+        default=5.0,
+        help="with a load and a surface: start it this far above [mm] (default 5)",
+    )
+    parser.add_argument("--tilt-deg", default="0,0", help="base tilt U,V [deg] (default 0,0)")
+    parser.add_argument("--seed", type=int, default=0, help="sensor noise seed (default 0)")
+    parser.add_argument(
+        "--gain-error-percent", type=float, default=0.0, help="sensor gain error [%%] (default 0)"
+    )
+    parser.add_argument(
+        "--drift-N-per-min", default="0,0,0", help="force-bias drift x,y,z [N/min] (default 0,0,0)"
+    )
+    parser.add_argument(
+        "--truth",
+        metavar="FILE",
+        help="write the true tool, bias, tilt, mount (default: not written)",
+    )
+    parser.add_argument(
+        "--contact-log", metavar="FILE", help="write the contact log (CSV; default: not written)"
+    )
+    parser.add_argument(
+        "--fault", choices=_FAULTS, help="inject this fault on demand (default: none)"
+    )
+    parser.add_argument(
+        "--fault-at-s",
+        type=float,
+        default=1.0,
+        help="when, after the first RTDE stream starts [s] (default 1)",
     )
     parser.add_argument(
         "--no-realtime",

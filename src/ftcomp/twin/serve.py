@@ -19,6 +19,7 @@ readings (the same physics, not a second sensor).
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import csv
 import dataclasses
@@ -248,6 +249,10 @@ class _Twin:
         self.fault_fired = False
         self.rtde_silent = False
         self.latency = False
+        self.delayed: collections.deque[tuple[float, dict[str, object], dict[str, Any]]] = (
+            collections.deque()
+        )
+        self.delayed_ready = threading.Condition()
         threading.Thread(target=self._accept_rtde, args=(ports["rtde"],), daemon=True).start()
         threading.Thread(
             target=serve_dashboard, args=(ports["dashboard"], self.controller), daemon=True
@@ -290,6 +295,7 @@ class _Twin:
             self.controller.stop_program()
         elif fault == "latency":
             self.latency = True
+            threading.Thread(target=self._publish_delayed, daemon=True).start()
 
     def state(self) -> dict[str, object]:
         cell, ctl = self.cell, self.controller
@@ -330,6 +336,24 @@ class _Twin:
         }
 
     _last_wrench: list[float] | None = None
+
+    def _publish(self, state: dict[str, object], registers: dict[str, Any]) -> None:
+        with self.sessions_lock:
+            sessions = list(self.sessions)
+        for session in sessions:
+            session.publish(state, registers)
+
+    def _publish_delayed(self) -> None:
+        """The latency fault's sender: each package at its due time, in order."""
+        while True:
+            with self.delayed_ready:
+                while not self.delayed:
+                    self.delayed_ready.wait()
+                due, state, registers = self.delayed.popleft()
+            wait = due - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+            self._publish(state, registers)
 
     def finish(self, result: TwinResult) -> TwinResult:
         """Stop the program and the Net F/T; the result with the records it sent."""
@@ -376,13 +400,14 @@ class _Twin:
             self.netft.push(counts, status)
             if not self.rtde_silent:
                 state = self.state()
-                if self.latency:
-                    time.sleep(0.008 + 0.004 * float(rng.random()))
-                with self.sessions_lock:
-                    sessions = list(self.sessions)
                 registers = {**ctl.inputs, **ctl.registers}
-                for session in sessions:
-                    session.publish(state, registers)  # type: ignore[arg-type]
+                if self.latency:  # the network holds the package back; the cell goes on
+                    due = time.monotonic() + 0.008 + 0.004 * float(rng.random())
+                    with self.delayed_ready:
+                        self.delayed.append((due, state, registers))
+                        self.delayed_ready.notify()
+                else:
+                    self._publish(state, registers)
             if log is not None:
                 p, R = cell.sensor_pose()
                 log.writerow(
