@@ -23,7 +23,7 @@ import socket
 import struct
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from multiprocessing.connection import Connection
 from typing import Final
@@ -39,7 +39,11 @@ __all__ = [
     "SERIOUS_STATUS",
     "NetFtProcess",
     "NetFtServer",
+    "bind_socket",
+    "configuration_page",
+    "rdt_requests",
     "realtime_priority",
+    "serve_configuration",
 ]
 
 RDT_PORT: Final = 49152
@@ -54,13 +58,46 @@ _REQUEST: Final = struct.Struct(">HHI")
 _STOP, _START, _BUFFERED, _BIAS = 0x0000, 0x0002, 0x0003, 0x0042
 
 
-def _configuration_page() -> bytes:
+def configuration_page(
+    counts_per_force: float, counts_per_torque: float, force_unit: str, torque_unit: str
+) -> bytes:
+    """The Net F/T's ``netftapi2.xml``: counts per force and torque unit, the units' labels."""
     return (
         '<?xml version="1.0" encoding="utf-8"?>\n<netft>'
-        "<prodname>ftcomp twin Net F/T</prodname>"
-        f"<cfgcpf>{COUNTS_PER_FORCE:g}</cfgcpf><cfgcpt>{COUNTS_PER_TORQUE:g}</cfgcpt>"
-        "<scfgfu>N</scfgfu><scfgtu>Nm</scfgtu></netft>\n"
+        "<prodname>ftcomp Net F/T</prodname>"
+        f"<cfgcpf>{counts_per_force:g}</cfgcpf><cfgcpt>{counts_per_torque:g}</cfgcpt>"
+        f"<scfgfu>{force_unit}</scfgfu><scfgtu>{torque_unit}</scfgtu></netft>\n"
     ).encode()
+
+
+def serve_configuration(http: socket.socket, page: bytes) -> ThreadingHTTPServer:
+    """Serve ``GET /netftapi2.xml`` on a bound TCP socket, on a daemon thread; returns the
+    server (``shutdown()`` and ``server_close()`` end it)."""
+
+    class Handler(BaseHTTPRequestHandler):
+        def do_GET(self) -> None:
+            if self.path != "/netftapi2.xml":
+                self.send_error(404)
+                return
+            self.send_response(200)
+            self.send_header("Content-Type", "text/xml")
+            self.send_header("Content-Length", str(len(page)))
+            self.end_headers()
+            self.wfile.write(page)
+
+        def log_message(self, *args: object) -> None:
+            pass
+
+    class Server(ThreadingHTTPServer):
+        def server_bind(self) -> None:  # the socket is bound already
+            self.server_address = http.getsockname()
+
+    server = Server(http.getsockname(), Handler, bind_and_activate=False)
+    server.socket.close()
+    server.socket = http
+    http.listen(8)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server
 
 
 class NetFtServer:
@@ -93,31 +130,9 @@ class NetFtServer:
         self.frozen: list[int] | None = None
         self.last: list[int] | None = None
         self.sent = 0
-        page = _configuration_page()
-
-        class Handler(BaseHTTPRequestHandler):
-            def do_GET(self) -> None:
-                if self.path != "/netftapi2.xml":
-                    self.send_error(404)
-                    return
-                self.send_response(200)
-                self.send_header("Content-Type", "text/xml")
-                self.send_header("Content-Length", str(len(page)))
-                self.end_headers()
-                self.wfile.write(page)
-
-            def log_message(self, *args: object) -> None:
-                pass
-
-        class Server(ThreadingHTTPServer):
-            def server_bind(self) -> None:  # the socket is bound already
-                self.server_address = http.getsockname()
-
-        self.http = Server(http.getsockname(), Handler, bind_and_activate=False)
-        self.http.socket.close()
-        self.http.socket = http
-        http.listen(8)
-        threading.Thread(target=self.http.serve_forever, daemon=True).start()
+        self.http = serve_configuration(
+            http, configuration_page(COUNTS_PER_FORCE, COUNTS_PER_TORQUE, "N", "Nm")
+        )
         threading.Thread(target=self._listen, daemon=True).start()
         threading.Thread(target=self._sender, daemon=True).start()
 
@@ -131,16 +146,7 @@ class NetFtServer:
                 self.lose_next = 200
 
     def _listen(self) -> None:
-        while True:
-            try:
-                data, addr = self.sock.recvfrom(64)
-            except OSError:
-                return
-            if len(data) < _REQUEST.size:
-                continue
-            header, command, count = _REQUEST.unpack(data[: _REQUEST.size])
-            if header != 0x1234:
-                continue
+        for addr, command, count in rdt_requests(self.sock):
             with self.lock:
                 if command in (_START, _BUFFERED):
                     self.peer, self.rdt_sequence, self.remaining = addr, 0, count
@@ -246,7 +252,28 @@ def realtime_priority(priority: int) -> bool:
     return True
 
 
-def _bind(host: str, port: int, kind: int) -> socket.socket:
+def rdt_requests(sock: socket.socket) -> Iterator[tuple[tuple[str, int], int, int]]:
+    """Every well-formed RDT request arriving on ``sock``: ``(sender, command, sample count)``
+    (a request that is too short or lacks the 0x1234 header is ignored); ends when the socket
+    closes."""
+    while True:
+        try:
+            data, addr = sock.recvfrom(64)
+        except OSError:
+            return
+        if len(data) < _REQUEST.size:
+            continue
+        header, command, count = _REQUEST.unpack(data[: _REQUEST.size])
+        if header == 0x1234:
+            yield addr, command, count
+
+
+def bind_socket(host: str, port: int, kind: int = socket.SOCK_STREAM) -> socket.socket:
+    """A socket bound to ``host:port`` (TCP with SO_REUSEADDR, or UDP).
+
+    Raises:
+        ParameterError: the port cannot be bound (busy, or the address is not local).
+    """
     sock = socket.socket(socket.AF_INET, kind)
     if kind == socket.SOCK_STREAM:
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -261,9 +288,9 @@ def _bind(host: str, port: int, kind: int) -> socket.socket:
 def _child(host: str, rate_hz: float, realtime: bool, conn: Connection) -> None:
     """The Net F/T process: bind, say so, then serve what the cell's loop sends."""
     try:
-        rdt = _bind(host, RDT_PORT, socket.SOCK_DGRAM)
+        rdt = bind_socket(host, RDT_PORT, socket.SOCK_DGRAM)
         try:
-            http = _bind(host, NETFT_HTTP_PORT, socket.SOCK_STREAM)
+            http = bind_socket(host, NETFT_HTTP_PORT, socket.SOCK_STREAM)
         except ParameterError:
             rdt.close()
             raise

@@ -22,6 +22,7 @@ from ftcomp.twin.controller import UrController
 __all__ = [
     "DASHBOARD_PORT",
     "SCRIPT_PORTS",
+    "accept_forever",
     "serve_dashboard",
     "serve_script",
 ]
@@ -79,7 +80,7 @@ def serve_dashboard(listener: socket.socket, controller: UrController) -> None:
                     return
                 conn.sendall((_dashboard_answer(controller, line) + "\n").encode())
 
-    _accept_forever(listener, session)
+    accept_forever(listener, session)
 
 
 def serve_script(listener: socket.socket, controller: UrController) -> None:
@@ -101,10 +102,12 @@ def serve_script(listener: socket.socket, controller: UrController) -> None:
                     controller.start_program(text)
                     text = ""
 
-    _accept_forever(listener, session)
+    accept_forever(listener, session)
 
 
-def _accept_forever(listener: socket.socket, session: Callable[[socket.socket], None]) -> None:
+def accept_forever(listener: socket.socket, session: Callable[[socket.socket], None]) -> None:
+    """Accept TCP clients until the listener closes; each one (``TCP_NODELAY``) is served by
+    ``session`` on a daemon thread of its own."""
     while True:
         try:
             conn, _ = listener.accept()

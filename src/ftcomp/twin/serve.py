@@ -54,9 +54,16 @@ from ftcomp.twin.netft import (
     RT_PRIORITY,
     SERIOUS_STATUS,
     NetFtProcess,
+    bind_socket,
     realtime_priority,
 )
-from ftcomp.twin.ports import DASHBOARD_PORT, SCRIPT_PORTS, serve_dashboard, serve_script
+from ftcomp.twin.ports import (
+    DASHBOARD_PORT,
+    SCRIPT_PORTS,
+    accept_forever,
+    serve_dashboard,
+    serve_script,
+)
 from ftcomp.twin.rtde import RtdeSession
 
 __all__ = ["FAULTS", "ROBOTS", "TwinConfig", "TwinResult", "serve_twin"]
@@ -193,27 +200,15 @@ class TwinResult:
     realtime: bool = False
 
 
-def _bind(host: str, port: int, kind: int = socket.SOCK_STREAM) -> socket.socket:
-    sock = socket.socket(socket.AF_INET, kind)
-    if kind == socket.SOCK_STREAM:
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-    try:
-        sock.bind((host, port))
-    except OSError as exc:
-        sock.close()
-        raise ParameterError(f"cannot bind {host}:{port}: {exc.strerror}") from None
-    return sock
-
-
 @contextlib.contextmanager
 def _bound(config: TwinConfig) -> Iterator[dict[str, socket.socket]]:
     """Every socket, bound before anything runs (a busy port is one error, nothing left)."""
     ports: dict[str, socket.socket] = {}
     try:
-        ports["rtde"] = _bind(config.robot_host, _RTDE_PORT)
-        ports["dashboard"] = _bind(config.robot_host, DASHBOARD_PORT)
+        ports["rtde"] = bind_socket(config.robot_host, _RTDE_PORT)
+        ports["dashboard"] = bind_socket(config.robot_host, DASHBOARD_PORT)
         for port in SCRIPT_PORTS:
-            ports[f"script{port}"] = _bind(config.robot_host, port)
+            ports[f"script{port}"] = bind_socket(config.robot_host, port)
         for sock in ports.values():
             sock.listen(8)
         yield ports
@@ -253,7 +248,9 @@ class _Twin:
             collections.deque()
         )
         self.delayed_ready = threading.Condition()
-        threading.Thread(target=self._accept_rtde, args=(ports["rtde"],), daemon=True).start()
+        threading.Thread(
+            target=accept_forever, args=(ports["rtde"], self._rtde_session), daemon=True
+        ).start()
         threading.Thread(
             target=serve_dashboard, args=(ports["dashboard"], self.controller), daemon=True
         ).start()
@@ -262,18 +259,12 @@ class _Twin:
                 target=serve_script, args=(ports[f"script{port}"], self.controller), daemon=True
             ).start()
 
-    def _accept_rtde(self, listener: socket.socket) -> None:
-        while True:
-            try:
-                conn, _ = listener.accept()
-            except OSError:
-                return
-            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            session = RtdeSession(conn, _VERSION, self.controller.write_input)
-            with self.sessions_lock:
-                self.packets_closed += sum(s.packets for s in self.sessions if s.closed)
-                self.sessions = [s for s in self.sessions if not s.closed] + [session]
-            threading.Thread(target=session.serve, daemon=True).start()
+    def _rtde_session(self, conn: socket.socket) -> None:
+        session = RtdeSession(conn, _VERSION, self.controller.write_input)
+        with self.sessions_lock:
+            self.packets_closed += sum(s.packets for s in self.sessions if s.closed)
+            self.sessions = [s for s in self.sessions if not s.closed] + [session]
+        session.serve()
 
     def _fire_fault(self, now: float) -> None:
         fault = self.config.fault
