@@ -1,6 +1,7 @@
 """The twin's UR controller: the register protocol of ``ur_rtde``'s control script, and motion.
 
-``ur_rtde``'s :class:`RTDEControlInterface` (1.5 to 1.6) uploads a URScript program
+``ur_rtde``'s :class:`RTDEControlInterface` (1.6, the ``[ur]`` extra's range; tested with
+1.6.5) uploads a URScript program
 (``rtde_control``) to the script port and then talks to it through RTDE registers only. The
 program's main loop, every controller cycle:
 

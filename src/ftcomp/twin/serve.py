@@ -9,7 +9,7 @@ nothing else: the robot's (RTDE 30004, dashboard 29999, script 30001-30003) and 
 (RDT UDP 49152, HTTP 80).
 
 What is faithful: the wire protocols (RTDE v2 with its real types, the dashboard's answers,
-the script's register protocol as ``ur_rtde`` 1.5-1.6 uses it, Net F/T HTTP and RDT with
+the script's register protocol as ``ur_rtde`` 1.6 uses it, Net F/T HTTP and RDT with
 its bias and buffered mode); the 500 Hz stream; moveL/speedL/servoL/stops as profiles; the
 contact physics of the cell (MuJoCo). What is not: the arm is the cell's six-axis arm
 (:mod:`ftcomp.sim.arm`), not UR5e's kinematics and masses; joint-space moves, force mode and the
