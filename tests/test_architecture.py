@@ -58,6 +58,8 @@ LAYERS: dict[str, int] = {
     "ftcomp.sim": 4,
     # 5. live sessions as library calls
     "ftcomp.session": 5,
+    # the twin serves devices from the simulated cell (a session of its own)
+    "ftcomp.twin": 5,
     # 6. plots and html pages (extra [report])
     "ftcomp.views": 6,
     # 7. the facade: lazy exports of library names

@@ -22,46 +22,15 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import numpy as np
 
+from ftcomp.twin.netft import configuration_page, rdt_requests, serve_configuration
 from standins.scenario import Scenario
 
-_REQUEST = struct.Struct(">HHI")
 _RECORD = struct.Struct(">III6i")
-_HEADER = 0x1234
 _STOP, _START, _BIAS = 0x0000, 0x0002, 0x0042
 _SERIOUS_STATUS = 0x80020000
-
-
-def _configuration_page(s: Scenario) -> bytes:
-    return (
-        '<?xml version="1.0" encoding="utf-8"?>\n<netft>'
-        "<prodname>ftcomp stand-in Net F/T</prodname>"
-        f"<cfgcpf>{s.counts_per_force:g}</cfgcpf><cfgcpt>{s.counts_per_torque:g}</cfgcpt>"
-        f"<scfgfu>{s.force_unit}</scfgfu><scfgtu>{s.torque_unit}</scfgtu></netft>\n"
-    ).encode()
-
-
-def _http_server(host: str, port: int, page: bytes) -> ThreadingHTTPServer:
-    class Handler(BaseHTTPRequestHandler):
-        def do_GET(self) -> None:
-            if self.path != "/netftapi2.xml":
-                self.send_error(404)
-                return
-            self.send_response(200)
-            self.send_header("Content-Type", "text/xml")
-            self.send_header("Content-Length", str(len(page)))
-            self.end_headers()
-            self.wfile.write(page)
-
-        def log_message(self, *args: object) -> None:
-            pass
-
-    server = ThreadingHTTPServer((host, port), Handler)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    return server
 
 
 class _Rdt:
@@ -78,16 +47,7 @@ class _Rdt:
         self.lock = threading.Lock()
 
     def listen(self) -> None:
-        while True:
-            try:
-                data, addr = self.sock.recvfrom(64)
-            except OSError:
-                return
-            if len(data) < _REQUEST.size:
-                continue
-            header, command, _count = _REQUEST.unpack(data[: _REQUEST.size])
-            if header != _HEADER:
-                continue
+        for addr, command, _count in rdt_requests(self.sock):
             with self.lock:
                 if command == _START:
                     self.peer, self.rdt_sequence = addr, 0
@@ -102,7 +62,11 @@ class _Rdt:
 
 def serve(host: str, rdt_port: int, http_port: int, s: Scenario) -> None:
     """Serve until ``s.max_s`` has passed."""
-    _http_server(host, http_port, _configuration_page(s))
+    http = socket.socket()
+    http.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    http.bind((host, http_port))
+    page = configuration_page(s.counts_per_force, s.counts_per_torque, s.force_unit, s.torque_unit)
+    serve_configuration(http, page)
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sock.bind((host, rdt_port))
     rdt = _Rdt(sock, s.start_timeline)

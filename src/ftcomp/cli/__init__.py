@@ -45,6 +45,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "stream": ("ftcomp.cli.stream", "log a sensor's readings, raw and compensated, at its rate"),
     "run": ("ftcomp.cli.run", "run the compliant loop on a robot with a calibration"),
+    "twin": ("ftcomp.cli.twin", "serve the simulated cell as a UR e-Series with a Net F/T"),
     "rebias": (
         "ftcomp.cli.rebias",
         "re-estimate only the sensor bias from still readings, the tool model kept",
@@ -70,7 +71,12 @@ SIM_COMMANDS: dict[str, tuple[str, str]] = {
 #: Commands that need an extra beyond the lean install (``pip install ftcomp``), checked before
 #: the command runs so that a missing one is a single line naming it, exit code 2:
 #: ``error: ftcomp demo needs MuJoCo and matplotlib: pip install 'ftcomp[demo]'``.
-COMMAND_EXTRAS: dict[str, str] = {"demo": "demo", "sim collect": "sim", "sim place": "demo"}
+COMMAND_EXTRAS: dict[str, str] = {
+    "demo": "demo",
+    "twin": "sim",
+    "sim collect": "sim",
+    "sim place": "demo",
+}
 
 
 def _chosen(argv: Sequence[str], names: Sequence[str]) -> str | None:

@@ -44,7 +44,7 @@ import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Literal, Protocol
+from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -66,6 +66,7 @@ from ftcomp.session.verdicts import judge_placement
 __all__ = [
     "COLUMNS",
     "DEFAULT_GAINS",
+    "ContactWrench",
     "PlacementCell",
     "PlacementConfig",
     "PlacementControl",
@@ -251,10 +252,14 @@ def placement_metrics(
     weight_N: float,
     config: PlacementConfig,
     dt: float,
+    true_wrench: NDArray[np.float64] | None = None,
+    down_base: NDArray[np.float64] | None = None,
 ) -> dict[str, Any]:
     """The run's metrics from its timeseries (see the module docstring of
     :mod:`ftcomp.session.placement` for signs); ``decision`` is the row where the run was
-    decided, ``hold_end`` the end of the hold after it."""
+    decided, ``hold_end`` the end of the hold after it. With the six-axis true contact wrench
+    of every row (``true_wrench``, shape (n, 6), base frame) and gravity's direction in the
+    base frame (``down_base``), the verdict also judges the lateral contact force."""
     run = slice(0, decision + 1)
     true_force = s["force_true_contact_N"][run]
     in_contact = np.flatnonzero(true_force > 0.05 * weight_N)
@@ -268,8 +273,19 @@ def placement_metrics(
         final_force = float(s["force_compensated_N"][decision])
     final_true = float(true_force[-1]) if len(true_force) else 0.0
     peak_press = max(0.0, float(np.max(s["force_true_contact_N"], initial=0.0)) - weight_N)
-    verdict = judge_placement(outcome, final_true, peak_press, weight_N, config.gentle_press_N)
+    final_wrench: list[float] | None = None
+    lateral: float | None = None
+    if true_wrench is not None and down_base is not None and len(true_wrench) > decision:
+        w = true_wrench[decision]
+        force = w[:3]
+        lateral = float(np.linalg.norm(force - (force @ down_base) * down_base))
+        final_wrench = w.tolist()
+    verdict = judge_placement(
+        outcome, final_true, peak_press, weight_N, config.gentle_press_N, lateral
+    )
     return {
+        "final_true_contact_wrench": final_wrench,
+        "final_true_lateral_N": lateral,
         "placed": placed,
         "verdict": verdict.verdict,
         "true_press_N": verdict.true_press_N,
@@ -327,6 +343,17 @@ class PlacementCell(Protocol):
         ...
 
 
+@runtime_checkable
+class ContactWrench(Protocol):
+    """A placement cell that reports the whole true contact wrench (six axes), not only the
+    force along gravity: the simulated cell and the twin."""
+
+    def true_contact_wrench_N(self) -> NDArray[np.float64]:
+        """The wrench the surface exerts on the load, base frame: force [N], torque about the
+        TCP [N*m], shape (6,)."""
+        ...
+
+
 class _PlacementLog:
     """The placement's rows (:data:`COLUMNS`) from the compliant step's cycle records, and the
     position-only descent's planned twist (see the module docstring)."""
@@ -341,6 +368,8 @@ class _PlacementLog:
         self.p_ref: NDArray[np.float64] | None = None
         self.t0_ns = 0
         self.rows: list[tuple[float, ...]] = []
+        self.wrench_cell = cell if isinstance(cell, ContactWrench) else None
+        self.true_wrenches: list[NDArray[np.float64]] = []
         self.descent_prev = 0.0
         self.decision_index: int | None = None
         self.f_filt = math.nan
@@ -388,6 +417,8 @@ class _PlacementLog:
                 self.cell.true_contact_force_N(),
             )
         )
+        if self.wrench_cell is not None:
+            self.true_wrenches.append(self.wrench_cell.true_contact_wrench_N())
 
     def __call__(self, record: CycleRecord) -> None:
         """One controlled cycle."""
@@ -510,8 +541,9 @@ def run_placement(
     data = np.array(log.rows, dtype=float).reshape(-1, len(COLUMNS))
     series = {name: data[:, i].copy() for i, name in enumerate(COLUMNS)}
     weight = cell.load_weight_N()
+    wrenches = np.array(log.true_wrenches) if log.true_wrenches else None
     metrics = placement_metrics(
-        series, decision_index, hold_end, outcome, placed, weight, config, dt
+        series, decision_index, hold_end, outcome, placed, weight, config, dt, wrenches, log.down
     )
     return PlacementResult(config, series, metrics)
 

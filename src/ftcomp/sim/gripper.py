@@ -125,9 +125,25 @@ class GripperAndSurfaces:
 
     def true_contact_force_world_N(self) -> NDArray[np.float64]:
         """Total force the surfaces (table, book, sponge, floor) exert on the load [N], world."""
-        total = np.zeros(3)
+        return self._contact_wrench_world(np.zeros(3))[:3]
+
+    def true_contact_wrench_base(self, point_base_m: ArrayLike) -> NDArray[np.float64]:
+        """The wrench the surfaces (table, book, sponge, floor) exert on the load, base frame:
+        force [N] and torque about ``point_base_m`` [N*m] (e.g. the TCP), shape (6,).
+
+        All six axes: every contact's force and its torsional and rolling torques, with the
+        moment of each force about the point (the contact's position in the base frame).
+        """
+        point_world = self._R_world_base @ np.asarray(point_base_m, dtype=float)
+        wrench = self._contact_wrench_world(point_world)
+        R_base_world = self._R_world_base.T
+        return np.concatenate([R_base_world @ wrench[:3], R_base_world @ wrench[3:]])
+
+    def _contact_wrench_world(self, point_world: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The surfaces' wrench on the load, world frame, torque about ``point_world``."""
+        wrench = np.zeros(6)
         if self._load_geom < 0:
-            return total
+            return wrench
         m, d = self._model, self._data
         c6 = np.empty(6)
         for i in range(d.ncon):
@@ -142,8 +158,11 @@ class GripperAndSurfaces:
             if other not in self._surface_geoms:
                 continue
             mujoco.mj_contactForce(m, d, i, c6)
-            total += sign * (c.frame.reshape(3, 3).T @ c6[:3])
-        return total
+            frame_T = c.frame.reshape(3, 3).T
+            f = sign * (frame_T @ c6[:3])
+            wrench[:3] += f
+            wrench[3:] += np.cross(c.pos - point_world, f) + sign * (frame_T @ c6[3:])
+        return wrench
 
     def true_contact_force_N(self) -> float:
         """Vertical force the table and the surface on it push up on the load [N] (>= 0).

@@ -12,6 +12,9 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+import numpy as np
+from numpy.typing import NDArray
+
 from ftcomp import paper
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import Robot, WrenchSensor
@@ -112,6 +115,11 @@ class SimPlacementCell:
     def true_contact_force_N(self) -> float:
         """The simulator's vertical contact force on the load [N]."""
         return self.cell.true_contact_force_N()
+
+    def true_contact_wrench_N(self) -> NDArray[np.float64]:
+        """The wrench the surface exerts on the load, base frame, six axes: force [N] and
+        torque about the TCP (the sensor origin) [N*m], shape (6,)."""
+        return self.cell.true_contact_wrench_base(self.cell.sensor_pose()[0])
 
     def load_weight_N(self) -> float:
         """The load's weight [N]."""

@@ -1,0 +1,131 @@
+"""``ftcomp twin``: serve the simulated cell as a UR e-Series with a wrist Net F/T on loopback.
+
+``ftcomp twin --robot-host 127.0.0.N --sensor-host 127.0.0.M [--seconds S] [--load-kg X
+--surface sponge|book|none --clearance-mm C] [--tilt-deg U,V] [--truth truth.json]
+[--contact-log contact.csv] [--fault NAME --fault-at-s T]``
+
+The robot answers RTDE (30004, 500 Hz), the dashboard (29999) and the script ports
+(30001-30003) on the robot host, as ``ur_rtde``'s ``RTDEControlInterface`` and
+``RTDEReceiveInterface`` need them; the Net F/T answers HTTP (netftapi2.xml) and RDT over UDP
+49152 on the sensor host. Nothing else is bound. Prints ``twin ready: ...`` once every socket
+is bound, serves until ``--seconds`` pass or SIGTERM / Ctrl-C, then a line of what it served.
+See docs/twin.md for a first session rehearsed against it.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ftcomp.errors import ParameterError
+
+__all__ = ["register", "run"]
+
+_FAULTS = (
+    "sensor-frozen",
+    "sensor-fault",
+    "rdt-loss",
+    "rtde-stop",
+    "protective-stop",
+    "script-stop",
+    "latency",
+)
+
+
+def _floats(text: str, n: int, name: str) -> tuple[float, ...]:
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise ParameterError(f"{name}: {text!r} is not {n} comma-separated numbers") from None
+    if len(values) != n:
+        raise ParameterError(f"{name}: {text!r} is not {n} comma-separated numbers")
+    return values
+
+
+def register(parser: argparse.ArgumentParser) -> None:
+    """Add the ``twin`` command's arguments to its parser."""
+    parser.description = __doc__.split("\n\n", 1)[1].replace("``", "") if __doc__ else None
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    parser.add_argument("--robot-host", required=True, help="loopback address of the robot")
+    parser.add_argument("--sensor-host", required=True, help="loopback address of the Net F/T")
+    parser.add_argument(
+        "--seconds", type=float, default=3600.0, help="serve this long [s] (default 3600)"
+    )
+    parser.add_argument("--robot", default="ur5e", help="the robot answered as (default ur5e)")
+    parser.add_argument(
+        "--load-kg", type=float, help="a load held in the gripper [kg] (default: none)"
+    )
+    parser.add_argument("--surface", default="none", help="none | sponge | book (default none)")
+    parser.add_argument(
+        "--clearance-mm",
+        type=float,
+        default=5.0,
+        help="with a load and a surface: start it this far above [mm] (default 5)",
+    )
+    parser.add_argument("--tilt-deg", default="0,0", help="base tilt U,V [deg] (default 0,0)")
+    parser.add_argument("--seed", type=int, default=0, help="sensor noise seed (default 0)")
+    parser.add_argument(
+        "--gain-error-percent", type=float, default=0.0, help="sensor gain error [%%] (default 0)"
+    )
+    parser.add_argument(
+        "--drift-N-per-min", default="0,0,0", help="force-bias drift x,y,z [N/min] (default 0,0,0)"
+    )
+    parser.add_argument(
+        "--truth",
+        metavar="FILE",
+        help="write the true tool, bias, tilt, mount (default: not written)",
+    )
+    parser.add_argument(
+        "--contact-log", metavar="FILE", help="write the contact log (CSV; default: not written)"
+    )
+    parser.add_argument(
+        "--fault", choices=_FAULTS, help="inject this fault on demand (default: none)"
+    )
+    parser.add_argument(
+        "--fault-at-s",
+        type=float,
+        default=1.0,
+        help="when, after the first RTDE stream starts [s] (default 1)",
+    )
+    parser.add_argument(
+        "--no-realtime",
+        action="store_true",
+        help="do not ask for real-time priority (default: SCHED_FIFO where allowed)",
+    )
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Serve the twin; 0 when it ran its time or was stopped by a signal."""
+    from ftcomp.twin import TwinConfig, serve_twin
+
+    tilt = _floats(args.tilt_deg, 2, "--tilt-deg")
+    drift = _floats(args.drift_N_per_min, 3, "--drift-N-per-min")
+    config = TwinConfig(
+        robot_host=args.robot_host,
+        sensor_host=args.sensor_host,
+        seconds=args.seconds,
+        robot=args.robot,
+        load_kg=args.load_kg,
+        surface=args.surface,
+        clearance_mm=args.clearance_mm,
+        tilt_deg=(tilt[0], tilt[1]),
+        seed=args.seed,
+        gain_error_percent=args.gain_error_percent,
+        drift_N_per_min=(drift[0], drift[1], drift[2]),
+        truth_path=Path(args.truth) if args.truth else None,
+        contact_log_path=Path(args.contact_log) if args.contact_log else None,
+        fault=args.fault,
+        fault_at_s=args.fault_at_s,
+        realtime=not args.no_realtime,
+    )
+    result = serve_twin(config, lambda line: print(line, flush=True))
+    print(
+        f"twin served {result.cycles} cycles ({result.late_cycles} late), "
+        f"{result.rtde_packets} RTDE packages, {result.rdt_records} RDT records; "
+        f"step p50 {result.step_us_p50:.0f} us, p99 {result.step_us_p99:.0f} us"
+        f"{'' if result.realtime else ' (no real-time priority)'}; "
+        f"ended by {result.reason}",
+        flush=True,
+    )
+    return 0

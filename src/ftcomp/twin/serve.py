@@ -1,0 +1,497 @@
+"""``serve_twin``: the simulated cell served as a UR e-Series with a wrist Net F/T, on loopback.
+
+One process, one real-time loop at the e-Series' 500 Hz: each 2 ms cycle runs the controller
+(:class:`~ftcomp.twin.controller.UrController`: the control script's register protocol and the
+motion profiles), two 1 ms cycles of the MuJoCo cell, hands the wrist sensor's new samples
+(1200 Hz) to the Net F/T's RDT stream and one data package to every RTDE client, and writes
+the contact log's row. Sockets are bound before the loop starts, to the two addresses given and
+nothing else: the robot's (RTDE 30004, dashboard 29999, script 30001-30003) and the sensor's
+(RDT UDP 49152, HTTP 80).
+
+What is faithful: the wire protocols (RTDE v2 with its real types, the dashboard's answers,
+the script's register protocol as ``ur_rtde`` 1.6 uses it, Net F/T HTTP and RDT with
+its bias and buffered mode); the 500 Hz stream; moveL/speedL/servoL/stops as profiles; the
+contact physics of the cell (MuJoCo). What is not: the arm is the cell's six-axis arm
+(:mod:`ftcomp.sim.arm`), not UR5e's kinematics and masses; joint-space moves, force mode and the
+watchdog are not modelled; ``actual_TCP_force`` and ``ft_raw_wrench`` are the wrist sensor's
+readings (the same physics, not a second sensor).
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import csv
+import dataclasses
+import ipaddress
+import math
+import signal
+import socket
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+
+from ftcomp.errors import ParameterError
+from ftcomp.frames import rotvec_from_matrix
+from ftcomp.hardware.registry import parse_uri
+from ftcomp.io.atomic import atomic_output, atomic_write_text
+from ftcomp.io.truth_json import truth_document
+from ftcomp.sim.backend import MAX_LOAD_KG
+from ftcomp.sim.backend import open_robot as open_sim_robot
+from ftcomp.sim.cell import SimCell
+from ftcomp.sim.sensor import SensorSpec
+from ftcomp.sim.surfaces import SURFACE_KINDS
+from ftcomp.twin.controller import UrController
+from ftcomp.twin.netft import (
+    COUNTS_PER_FORCE,
+    COUNTS_PER_TORQUE,
+    RT_PRIORITY,
+    SERIOUS_STATUS,
+    NetFtProcess,
+    bind_socket,
+    realtime_priority,
+)
+from ftcomp.twin.ports import (
+    DASHBOARD_PORT,
+    SCRIPT_PORTS,
+    accept_forever,
+    serve_dashboard,
+    serve_script,
+)
+from ftcomp.twin.rtde import RtdeSession
+
+__all__ = ["FAULTS", "ROBOTS", "TwinConfig", "TwinResult", "serve_twin"]
+
+#: Robots the twin answers as.
+ROBOTS: Final = ("ur5e",)
+#: Faults on demand: name -> what the twin does from the fault's time on.
+FAULTS: Final = {
+    "sensor-frozen": "the Net F/T repeats its last reading (status healthy)",
+    "sensor-fault": "the Net F/T reports a serious status and goes on sending",
+    "rdt-loss": "the next 200 RDT records are lost on the way",
+    "rtde-stop": "the controller stops sending RTDE data (connections stay open)",
+    "protective-stop": "a protective stop: the arm stops, the program ends",
+    "script-stop": "the program is stopped from the pendant",
+    "latency": "every RTDE package is sent 8 ms late (and jitters by up to 4 ms)",
+}
+_CYCLE_S: Final = 0.002
+_VERSION: Final = (5, 11, 1, 108318)
+_RTDE_PORT: Final = 30004
+
+
+@dataclass(frozen=True)
+class TwinConfig:
+    """What the twin serves and how.
+
+    Attributes:
+        robot_host: loopback address of the robot's ports (127.0.0.0/8).
+        sensor_host: loopback address of the Net F/T (127.0.0.0/8).
+        seconds: serve this long [s] (or until SIGTERM / Ctrl-C).
+        robot: the robot answered as (:data:`ROBOTS`).
+        load_kg: a load held in the gripper [kg] (None: no load).
+        surface: what lies on the table (``none``, ``sponge``, ``book``).
+        clearance_mm: with a load and a surface, start holding it this far above [mm].
+        tilt_deg: base mounting tilt ``(U, V)`` [deg].
+        seed: the sensor noise's seed (the same options give the same readings).
+        gain_error_percent: the sensor's gain error on every axis [%].
+        drift_N_per_min: force-bias drift rate, x y z [N/min].
+        truth_path: write the true tool, bias, tilt and mount here (JSON), or None.
+        contact_log_path: write the contact log here (CSV), or None.
+        fault: a fault of :data:`FAULTS` to inject, or None.
+        fault_at_s: when, after the first RTDE client started streaming [s].
+        realtime: ask for SCHED_FIFO for the loop and the Net F/T's sender (as ur_rtde does).
+    """
+
+    robot_host: str
+    sensor_host: str
+    seconds: float
+    robot: str = "ur5e"
+    load_kg: float | None = None
+    surface: str = "none"
+    clearance_mm: float = 5.0
+    tilt_deg: tuple[float, float] = (0.0, 0.0)
+    seed: int = 0
+    gain_error_percent: float = 0.0
+    drift_N_per_min: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    truth_path: Path | None = None
+    contact_log_path: Path | None = None
+    fault: str | None = None
+    fault_at_s: float = 1.0
+    realtime: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("robot_host", "sensor_host"):
+            host = getattr(self, name)
+            try:
+                address = ipaddress.IPv4Address(host)
+            except ValueError:
+                raise ParameterError(f"{name}: {host!r} is not an IPv4 address") from None
+            if not address.is_loopback:
+                raise ParameterError(f"{name}: {host} is outside 127.0.0.0/8 (loopback only)")
+        if self.robot_host == self.sensor_host:
+            raise ParameterError("robot_host and sensor_host must differ")
+        if not (math.isfinite(self.seconds) and 0.0 < self.seconds <= 86400.0):
+            raise ParameterError(f"seconds must be in (0, 86400], got {self.seconds}")
+        if self.robot not in ROBOTS:
+            raise ParameterError(f"robot: unknown {self.robot!r}; known: {', '.join(ROBOTS)}")
+        if self.surface not in SURFACE_KINDS:
+            raise ParameterError(
+                f"surface: unknown {self.surface!r}; known: {', '.join(SURFACE_KINDS)}"
+            )
+        if self.load_kg is not None and not (
+            math.isfinite(self.load_kg) and 0.0 < self.load_kg <= MAX_LOAD_KG
+        ):
+            raise ParameterError(f"load_kg must be in (0, {MAX_LOAD_KG}] kg, got {self.load_kg}")
+        if not (math.isfinite(self.clearance_mm) and 0.0 <= self.clearance_mm <= 100.0):
+            raise ParameterError(f"clearance_mm must be in [0, 100], got {self.clearance_mm}")
+        if any(not math.isfinite(t) or abs(t) >= 30.0 for t in self.tilt_deg):
+            raise ParameterError(f"tilt_deg must be within +-30 deg, got {self.tilt_deg}")
+        if self.fault is not None and self.fault not in FAULTS:
+            raise ParameterError(f"fault: unknown {self.fault!r}; known: {', '.join(FAULTS)}")
+        if not (math.isfinite(self.fault_at_s) and self.fault_at_s >= 0.0):
+            raise ParameterError(f"fault_at_s must be >= 0, got {self.fault_at_s}")
+        if self.seed < 0:
+            raise ParameterError(f"seed must be >= 0, got {self.seed}")
+        if not (math.isfinite(self.gain_error_percent) and abs(self.gain_error_percent) < 50.0):
+            raise ParameterError("gain_error_percent must be within +-50 %")
+
+    def sim_uri(self) -> str:
+        """The ``sim://`` URI of the cell this twin serves."""
+        parts = [f"tilt_deg={self.tilt_deg[0]:g},{self.tilt_deg[1]:g}", f"seed={self.seed}"]
+        if self.load_kg is not None:
+            parts += [f"load_kg={self.load_kg:g}", "grasp=1"]
+            if self.surface != "none":
+                parts.append(f"clearance_mm={self.clearance_mm:g}")
+        parts.append(f"surface={self.surface}")
+        if self.gain_error_percent:
+            parts.append(f"gain_error_percent={self.gain_error_percent:g}")
+        if any(self.drift_N_per_min):
+            parts.append("drift_N_per_min=" + ",".join(f"{v:g}" for v in self.drift_N_per_min))
+        return "sim://?" + "&".join(parts)
+
+
+@dataclass(frozen=True)
+class TwinResult:
+    """What a twin's run served.
+
+    Attributes:
+        cycles: controller cycles run.
+        late_cycles: cycles that started more than one period late.
+        rtde_packets: RTDE data packages sent, over all clients.
+        rdt_records: RDT records sent.
+        step_us_p50, step_us_p99: the cycle's compute time [us], percentiles.
+        reason: why it ended (``time``, ``signal``).
+        realtime: whether the loop got real-time priority (SCHED_FIFO).
+    """
+
+    cycles: int
+    late_cycles: int
+    rtde_packets: int
+    rdt_records: int
+    step_us_p50: float
+    step_us_p99: float
+    reason: str
+    realtime: bool = False
+
+
+@contextlib.contextmanager
+def _bound(config: TwinConfig) -> Iterator[dict[str, socket.socket]]:
+    """Every socket, bound before anything runs (a busy port is one error, nothing left)."""
+    ports: dict[str, socket.socket] = {}
+    try:
+        ports["rtde"] = bind_socket(config.robot_host, _RTDE_PORT)
+        ports["dashboard"] = bind_socket(config.robot_host, DASHBOARD_PORT)
+        for port in SCRIPT_PORTS:
+            ports[f"script{port}"] = bind_socket(config.robot_host, port)
+        for sock in ports.values():
+            sock.listen(8)
+        yield ports
+    finally:
+        for sock in ports.values():
+            with contextlib.suppress(OSError):
+                sock.close()
+
+
+def _pose6(p: np.ndarray, R: np.ndarray) -> list[float]:
+    return [*p.tolist(), *rotvec_from_matrix(R)]
+
+
+class _Twin:
+    """The running twin: the cell, the controller, the clients."""
+
+    def __init__(
+        self,
+        config: TwinConfig,
+        cell: SimCell,
+        ports: dict[str, socket.socket],
+        netft: NetFtProcess,
+    ):
+        self.config = config
+        self.cell = cell
+        self.controller = UrController(cell, _CYCLE_S)
+        self.sessions: list[RtdeSession] = []
+        self.sessions_lock = threading.Lock()
+        self.packets_closed = 0
+        self.netft = netft
+        self.sensor_streaming = False
+        self.started_at: float | None = None
+        self.fault_fired = False
+        self.rtde_silent = False
+        self.latency = False
+        self.delayed: collections.deque[tuple[float, dict[str, object], dict[str, Any]]] = (
+            collections.deque()
+        )
+        self.delayed_ready = threading.Condition()
+        threading.Thread(
+            target=accept_forever, args=(ports["rtde"], self._rtde_session), daemon=True
+        ).start()
+        threading.Thread(
+            target=serve_dashboard, args=(ports["dashboard"], self.controller), daemon=True
+        ).start()
+        for port in SCRIPT_PORTS:
+            threading.Thread(
+                target=serve_script, args=(ports[f"script{port}"], self.controller), daemon=True
+            ).start()
+
+    def _rtde_session(self, conn: socket.socket) -> None:
+        session = RtdeSession(conn, _VERSION, self.controller.write_input)
+        with self.sessions_lock:
+            self.packets_closed += sum(s.packets for s in self.sessions if s.closed)
+            self.sessions = [s for s in self.sessions if not s.closed] + [session]
+        session.serve()
+
+    def _fire_fault(self, now: float) -> None:
+        fault = self.config.fault
+        if fault is None or self.fault_fired:
+            return
+        streaming = any(s.started for s in self.sessions)
+        if self.started_at is None and streaming:
+            self.started_at = now
+        if self.started_at is None or now - self.started_at < self.config.fault_at_s:
+            return
+        self.fault_fired = True
+        if fault in ("sensor-frozen", "rdt-loss"):
+            self.netft.inject(fault)
+        elif fault == "rtde-stop":
+            self.rtde_silent = True
+        elif fault == "protective-stop":
+            self.controller.protective_stop("protective stop on demand (--fault)")
+        elif fault == "script-stop":
+            self.controller.stop_program()
+        elif fault == "latency":
+            self.latency = True
+            threading.Thread(target=self._publish_delayed, daemon=True).start()
+
+    def state(self) -> dict[str, object]:
+        cell, ctl = self.cell, self.controller
+        p, R = cell.sensor_pose()
+        w = (
+            cell.sensor.read().wrench_sensor.tolist()
+            if self._last_wrench is None
+            else self._last_wrench
+        )
+        w_base = [*(R @ np.array(w[:3])).tolist(), *(R @ np.array(w[3:])).tolist()]
+        runtime, robot_bits, robot_mode = ctl.status()
+        q = cell.q_rad.tolist()
+        qd = cell.data.qvel[:6].tolist()
+        return {
+            "timestamp": cell.time(),
+            "actual_TCP_pose": _pose6(p, R),
+            "target_TCP_pose": _pose6(ctl.p_ref, ctl.R_ref),
+            "actual_TCP_speed": ctl.v_ref.tolist(),
+            "target_TCP_speed": ctl.v_ref.tolist(),
+            "actual_q": q,
+            "target_q": cell.q_command_rad.tolist(),
+            "actual_qd": qd,
+            "target_qd": qd,
+            "actual_TCP_force": w_base,
+            "ft_raw_wrench": w,
+            "robot_mode": robot_mode,
+            "safety_mode": ctl.safety.safety_mode,
+            "safety_status": ctl.safety.safety_mode,
+            "safety_status_bits": ctl.safety.safety_status_bits,
+            "robot_status_bits": robot_bits,
+            "runtime_state": runtime,
+            "speed_scaling": 1.0,
+            "target_speed_fraction": 1.0,
+            "joint_mode": [255] * 6,
+            "payload": ctl.payload_kg,
+            "actual_main_voltage": 48.0,
+            "actual_robot_voltage": 48.0,
+        }
+
+    _last_wrench: list[float] | None = None
+
+    def _publish(self, state: dict[str, object], registers: dict[str, Any]) -> None:
+        with self.sessions_lock:
+            sessions = list(self.sessions)
+        for session in sessions:
+            session.publish(state, registers)
+
+    def _publish_delayed(self) -> None:
+        """The latency fault's sender: each package at its due time, in order."""
+        while True:
+            with self.delayed_ready:
+                while not self.delayed:
+                    self.delayed_ready.wait()
+                due, state, registers = self.delayed.popleft()
+            wait = due - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+            self._publish(state, registers)
+
+    def finish(self, result: TwinResult) -> TwinResult:
+        """Stop the program and the Net F/T; the result with the records it sent."""
+        self.controller.stop_program()
+        self.netft.close()
+        return dataclasses.replace(result, rdt_records=self.netft.sent)
+
+    def run(self, seconds: float, stop: threading.Event, log: Any) -> TwinResult:
+        cell, ctl = self.cell, self.controller
+        realtime = self.config.realtime and realtime_priority(RT_PRIORITY + 2)
+        steps: list[float] = []
+        late = cycles = 0
+        start = time.monotonic()
+        due = start
+        rng = np.random.default_rng(self.config.seed + 7)
+        reason = "time"
+        while True:
+            now = time.monotonic()
+            if stop.is_set():
+                reason = "signal"
+                break
+            if now - start >= seconds:
+                break
+            t0 = time.perf_counter()
+            self._fire_fault(now)
+            w_contact = cell.true_contact_wrench_base(cell.sensor_pose()[0])
+            twist = ctl.cycle(float(np.linalg.norm(w_contact[:3])))
+            cell.command_twist(twist)
+            cell.wait_cycle()
+            # Read after each 1 ms: at 1200 Hz most reads then see one new tick (the cheap path).
+            samples = cell.sensor.read_new()
+            cell.wait_cycle()
+            samples += cell.sensor.read_new()
+            counts = [
+                [round(v * COUNTS_PER_FORCE) for v in s.wrench_sensor[:3]]
+                + [round(v * COUNTS_PER_TORQUE) for v in s.wrench_sensor[3:]]
+                for s in samples
+            ]
+            if counts:
+                self._last_wrench = samples[-1].wrench_sensor.tolist()
+            status = (
+                SERIOUS_STATUS if self.fault_fired and self.config.fault == "sensor-fault" else 0
+            )
+            self.netft.push(counts, status)
+            if not self.rtde_silent:
+                state = self.state()
+                registers = {**ctl.inputs, **ctl.registers}
+                if self.latency:  # the network holds the package back; the cell goes on
+                    due = time.monotonic() + 0.008 + 0.004 * float(rng.random())
+                    with self.delayed_ready:
+                        self.delayed.append((due, state, registers))
+                        self.delayed_ready.notify()
+                else:
+                    self._publish(state, registers)
+            if log is not None:
+                p, R = cell.sensor_pose()
+                log.writerow(
+                    [
+                        f"{cell.time():.4f}",
+                        *(f"{v:.5f}" for v in w_contact),
+                        *(f"{v:.6f}" for v in _pose6(p, R)),
+                        "protective_stop" if ctl.safety.protective_stop else "normal",
+                    ]
+                )
+            steps.append(time.perf_counter() - t0)
+            cycles += 1
+            due += _CYCLE_S
+            wait = due - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+            elif wait < -_CYCLE_S:
+                late += 1
+                if wait < -0.05:  # far behind (a stall): start the schedule again
+                    due = time.monotonic()
+        us = np.array(steps) * 1e6 if steps else np.zeros(1)
+        return TwinResult(
+            cycles=cycles,
+            late_cycles=late,
+            rtde_packets=self.packets_closed + sum(s.packets for s in self.sessions),
+            rdt_records=0,
+            step_us_p50=float(np.percentile(us, 50)),
+            step_us_p99=float(np.percentile(us, 99)),
+            reason=reason,
+            realtime=realtime,
+        )
+
+
+def serve_twin(
+    config: TwinConfig, on_ready: Callable[[str], None], stop: threading.Event | None = None
+) -> TwinResult:
+    """Build the cell, bind every socket, call ``on_ready`` with the ready line, and serve
+    until ``config.seconds`` pass, ``stop`` is set, or SIGTERM / SIGINT arrives.
+
+    Raises:
+        ParameterError: a socket cannot be bound (busy port, address not local), or an option
+            is out of range. Nothing is left bound or half-written.
+    """
+    stop = stop if stop is not None else threading.Event()
+    # The loop, the RDT sender and the RTDE sessions share the interpreter: hand it over
+    # every 0.2 ms (Python's default, 5 ms, would hold a sender back by whole periods).
+    sys.setswitchinterval(2e-4)
+    cell = open_sim_robot(parse_uri(config.sim_uri()))
+    assert isinstance(cell, SimCell)
+    with _bound(config) as ports:
+        netft = NetFtProcess(config.sensor_host, SensorSpec().output_rate_Hz, config.realtime)
+        twin = _Twin(config, cell, ports, netft)
+        if config.truth_path is not None:
+            import json
+
+            document = truth_document(cell.true_gravity_model())
+            document["mount"] = {"R_tcp_sensor": np.eye(3).tolist(), "p_tcp_sensor_m": [0, 0, 0]}
+            document["twin"] = {"robot": config.robot, "sim_uri": config.sim_uri()}
+            atomic_write_text(config.truth_path, json.dumps(document, indent=2) + "\n")
+        previous: dict[signal.Signals, Any] = {}
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGTERM, signal.SIGINT):
+                previous[sig] = signal.signal(sig, lambda *_: stop.set())
+        try:
+            on_ready(
+                f"twin ready: robot ur://{config.robot_host} sensor netft://{config.sensor_host}"
+            )
+            if config.contact_log_path is None:
+                return twin.finish(twin.run(config.seconds, stop, None))
+            with atomic_output(config.contact_log_path) as tmp, open(tmp, "w", newline="") as f:
+                log = csv.writer(f)
+                log.writerow(
+                    [
+                        "t_s",
+                        "fx",
+                        "fy",
+                        "fz",
+                        "tx",
+                        "ty",
+                        "tz",
+                        "x",
+                        "y",
+                        "z",
+                        "rx",
+                        "ry",
+                        "rz",
+                        "safety",
+                    ]
+                )
+                return twin.finish(twin.run(config.seconds, stop, log))
+        finally:
+            twin.controller.stop_program()
+            if twin.netft.proc.is_alive():
+                twin.netft.close()
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)

@@ -1,0 +1,88 @@
+"""Start ``ftcomp twin`` in its own process and stop it: ``with running_twin(name) as twin``.
+
+The twin gets two loopback addresses of the test's own (robot, sensor), prints
+``twin ready: ...`` once every socket is bound, ends by itself after ``seconds`` and is
+terminated (SIGTERM, then killed) when the block ends.
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+from standins.launch import loopback_address
+
+__all__ = ["Twin", "running_twin"]
+
+
+@dataclass(frozen=True)
+class Twin:
+    """A running twin: its addresses and process."""
+
+    robot_host: str
+    sensor_host: str
+    proc: subprocess.Popen[str]
+
+    @property
+    def robot_uri(self) -> str:
+        return f"ur://{self.robot_host}"
+
+    @property
+    def sensor_uri(self) -> str:
+        return f"netft://{self.sensor_host}"
+
+
+@contextmanager
+def running_twin(
+    name: str, *args: str, seconds: float = 60.0, ready_timeout_s: float = 30.0
+) -> Iterator[Twin]:
+    """``ftcomp twin`` with ``args`` on two addresses derived from ``name``."""
+    robot_host = loopback_address(name, 1)
+    sensor_host = loopback_address(name, 2)
+    command = [
+        sys.executable,
+        "-m",
+        "ftcomp",
+        "twin",
+        "--robot-host",
+        robot_host,
+        "--sensor-host",
+        sensor_host,
+        "--seconds",
+        str(seconds),
+        *args,
+    ]
+    proc = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ)
+    )
+    try:
+        assert proc.stdout is not None
+        deadline = time.monotonic() + ready_timeout_s
+        line = ""
+        while time.monotonic() < deadline and proc.poll() is None:
+            ready, _, _ = select.select([proc.stdout], [], [], 0.1)
+            if ready:
+                line = proc.stdout.readline()
+                break
+        if not line.startswith("twin ready:"):
+            proc.kill()
+            _, err = proc.communicate(timeout=5)
+            raise RuntimeError(f"ftcomp twin did not start: {line!r} {err[-2000:]}")
+        yield Twin(robot_host, sensor_host, proc)
+    finally:
+        if proc.poll() is None:
+            proc.terminate()
+            try:
+                proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(timeout=5)
+        for stream in (proc.stdout, proc.stderr):
+            if stream is not None:
+                stream.close()

@@ -1,0 +1,60 @@
+"""Contact judged in six axes: the simulated cell's true contact wrench, the verdict's lateral
+force, and the cause of the lateral force a grasped load shows on the sponge."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco")
+
+from ftcomp.hardware.registry import parse_uri
+from ftcomp.session.verdicts import judge_placement
+from ftcomp.sim.backend import open_robot
+from ftcomp.sim.cell import SimCell
+
+WEIGHT_N = 4.905
+PLACE = "sim://?seed=4&tilt_deg=0,0&surface=sponge&load_kg=0.5&grasp=1&clearance_mm=2"
+
+
+def test_the_verdict_reports_the_lateral_force_and_keeps_its_judgement() -> None:
+    v = judge_placement("placed", WEIGHT_N - 0.03, 0.0, WEIGHT_N, 0.25, lateral_N=1.7)
+    assert v.verdict == "placed gently"
+    assert v.true_lateral_N == pytest.approx(1.7)
+    assert "lateral contact 1.700 N" in v.reason and "static friction" in v.reason
+    quiet = judge_placement("placed", WEIGHT_N, 0.0, WEIGHT_N, 0.25, lateral_N=0.01)
+    assert "negligible" in quiet.reason
+    assert judge_placement("placed", WEIGHT_N, 0.0, WEIGHT_N, 0.25).true_lateral_N is None
+
+
+def _set_down(friction: float) -> tuple[np.ndarray, np.ndarray]:
+    """Lower the held load straight down (world z) until the sponge carries it; the contact
+    wrench (base frame) and the TCP's measured-minus-commanded position [m]."""
+    cell = open_robot(parse_uri(PLACE))
+    assert isinstance(cell, SimCell)
+    m = cell.model
+    for name in ("load_geom", "sponge_top"):
+        m.geom_friction[m.geom(name).id, 0] = friction
+    cell.command_twist(np.array([0.0, 0.0, -0.002, 0.0, 0.0, 0.0]))
+    for _ in range(4000):
+        cell.wait_cycle()
+        if cell.true_contact_wrench_base(cell.sensor_pose()[0])[2] > WEIGHT_N:
+            break
+    cell.stop()
+    cell.step(300)
+    p = cell.sensor_pose()[0]
+    commanded = SimCell(cell.config, q_start_rad=cell.q_command_rad).sensor_pose()[0]
+    return cell.true_contact_wrench_base(p), p - commanded
+
+
+def test_the_lateral_force_on_the_sponge_is_the_servo_springback_held_by_friction() -> None:
+    sticking, sag = _set_down(friction=1.0)
+    sliding, relaxed = _set_down(friction=0.0)
+    assert sticking[2] == pytest.approx(WEIGHT_N, abs=0.1)
+    assert abs(sticking[0]) > 1.0  # about -1.7 N across the surface
+    # Without friction nothing holds the arm: it springs back to its command, no lateral force.
+    assert np.linalg.norm(sliding[:2]) < 0.01
+    assert np.linalg.norm(relaxed[:2]) < 2e-6
+    # With friction the arm stays where the load's weight had sagged it, across the surface.
+    assert sag[0] < -1e-5
+    assert np.sign(sticking[0]) == np.sign(sag[0])

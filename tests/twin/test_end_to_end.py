@@ -1,0 +1,105 @@
+"""The real workflow through the real clients (ur_rtde, pynetft) against ``ftcomp twin``:
+robot-driven ``record`` -> ``calibrate`` recovers the twin's truth; ``run`` with that
+calibration sets a 0.5 kg load down on the sponge and on the book gently (the twin's contact
+log)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rtde_control")
+pytest.importorskip("pynetft")
+pytest.importorskip("mujoco")
+
+from standins.twin_process import running_twin
+
+TILT = "--tilt-deg=-0.204,-0.129"
+LOAD_WEIGHT_N = 0.5 * 9.81
+KEYS = ("tool_weight_N", "center_of_gravity_m", "force_bias_N", "torque_bias_Nm")
+
+
+#: ``ftcomp`` in a process whose interpreter hands the lock over every 0.2 ms instead of 5 ms.
+#: With the default, on a loaded host the loop's catch-up cycles keep pynetft's reader thread
+#: from its packets for 3 cycles and ``run`` stops with ``repeated_sample`` (seen here in about
+#: half the runs; 3 of 3 settled with this): a fix for the client, not the twin.
+CLIENT = "import sys; sys.setswitchinterval(2e-4); from ftcomp.cli import main; sys.exit(main())"
+
+
+def _ftcomp(*args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-c", CLIENT, *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
+        check=False,
+    )
+
+
+@pytest.fixture(scope="module")
+def calibrated(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """Record the paper's poses on the twin, calibrate: (calibration, truth)."""
+    folder = tmp_path_factory.mktemp("twin_e2e")
+    truth, samples, calibration = folder / "truth.json", folder / "s.csv", folder / "cal.json"
+    with running_twin("twin_e2e_record", "--truth", str(truth), TILT, seconds=90.0) as twin:
+        robot = f"{twin.robot_uri}?max_speed_mm_s=250&max_accel_mm_s2=1500"
+        done = _ftcomp(
+            "record", "--robot", robot, "--sensor", twin.sensor_uri, "--poses", "paper",
+            "--samples-per-pose", "60", "--move-s", "0.5", "--position-mm", "450", "0", "420",
+            "-o", str(samples),
+        )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    done = _ftcomp("calibrate", str(samples), "-o", str(calibration))
+    assert done.returncode == 0, done.stderr
+    return calibration, truth
+
+
+def test_record_then_calibrate_recovers_the_twins_truth_within_3_standard_errors(
+    calibrated: tuple[Path, Path],
+) -> None:
+    calibration, truth = calibrated
+    found, true = json.loads(calibration.read_text()), json.loads(truth.read_text())
+    for key in (*KEYS, "gravity_in_base_N"):
+        error = np.atleast_1d(found[key]) - np.atleast_1d(true[key])
+        se = np.atleast_1d(found["std_errors"][key])
+        assert np.all(np.abs(error) <= 3.0 * se), (key, error, se)
+
+
+BOOK_PRESSES = pytest.mark.xfail(
+    reason="on the stiff book the loop's latency through the twin (RTDE, the speedL ramp, the "
+    "sensor's UDP stream: 3 to 4 cycles) turns the approach at K2 * weight into a press of "
+    "50-140 N (force limit, or the twin's protective stop); sim:// has no such latency. "
+    "Open: docs/twin.md",
+    strict=False,
+)
+
+
+@pytest.mark.parametrize("surface", ["sponge", pytest.param("book", marks=BOOK_PRESSES)])
+def test_run_sets_a_half_kilogram_load_down_gently(
+    calibrated: tuple[Path, Path], surface: str, tmp_path: Path
+) -> None:
+    calibration, _ = calibrated
+    contact, log = tmp_path / "contact.csv", tmp_path / "run.csv"
+    options = ("--load-kg", "0.5", "--surface", surface, "--clearance-mm", "2", TILT)
+    with running_twin(f"twin_e2e_{surface}", *options, "--contact-log", str(contact)) as twin:
+        done = _ftcomp(
+            "run", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri,
+            "-c", str(calibration), "--control", "admittance", "--axes", "z",
+            "--k1", "0.1", "--k2", "1", "--settle-band-N", "0.05", "--seconds", "30",
+            "--max-late-cycles", "50",  # a shared CI host: the client process is not real-time
+            "-o", str(log),
+        )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "settled" in done.stdout
+    with contact.open() as f:
+        rows = list(csv.DictReader(f))
+    fz = np.array([float(r["fz"]) for r in rows])  # the surface pushing up (base z ~ up)
+    assert fz.max() <= LOAD_WEIGHT_N + 0.3  # never pressed in beyond the weight
+    assert fz[-1] == pytest.approx(LOAD_WEIGHT_N, abs=0.05)  # the surface carries it all
+    assert all(r["safety"] == "normal" for r in rows)

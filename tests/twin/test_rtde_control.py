@@ -1,0 +1,95 @@
+"""``ur_rtde``'s own clients drive the twin (no ftcomp code on the client side): moveL arrives
+and reports done, speedL moves at its speed, servoL tracks a streamed line, stops hold."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+rtde_control = pytest.importorskip("rtde_control")
+rtde_receive = pytest.importorskip("rtde_receive")
+pytest.importorskip("mujoco")
+
+from ftcomp.frames import matrix_from_rotvec  # noqa: E402
+from standins.twin_process import Twin, running_twin  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def twin() -> Iterator[Twin]:
+    with running_twin("test_rtde_control", seconds=60.0) as t:
+        yield t
+
+
+@pytest.fixture(scope="module")
+def clients(twin: Twin) -> Iterator[tuple[object, object]]:
+    control = rtde_control.RTDEControlInterface(twin.robot_host)
+    receive = rtde_receive.RTDEReceiveInterface(twin.robot_host)
+    yield control, receive
+    control.stopScript()
+    control.disconnect()
+    receive.disconnect()
+
+
+def _angle_deg(a: list[float], b: list[float]) -> float:
+    R = matrix_from_rotvec(a[3:]) @ matrix_from_rotvec(b[3:]).T
+    return math.degrees(math.acos(max(-1.0, min(1.0, (np.trace(R) - 1.0) / 2.0))))
+
+
+def test_moveL_arrives_within_a_millimetre_and_a_tenth_of_a_degree(clients) -> None:
+    control, receive = clients
+    start = receive.getActualTCPPose()
+    R = matrix_from_rotvec(start[3:]) @ matrix_from_rotvec([0.0, 0.0, math.radians(10.0)])
+    from ftcomp.frames import rotvec_from_matrix
+
+    target = [start[0] - 0.03, start[1] + 0.02, start[2] + 0.01, *rotvec_from_matrix(R)]
+    assert control.moveL(target, 0.2, 1.0)
+    reached = receive.getActualTCPPose()
+    assert np.linalg.norm(np.subtract(reached[:3], target[:3])) < 1e-3
+    assert _angle_deg(reached, target) < 0.1
+
+
+def test_speedL_at_10_mm_s_for_one_second_moves_10_mm_and_the_stop_holds(clients) -> None:
+    control, receive = clients
+    start = receive.getActualTCPPose()
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 1.0:
+        control.speedL([0.0, 0.0, 0.01, 0.0, 0.0, 0.0], 2.0, 0.0)
+        time.sleep(0.01)
+    control.speedStop(2.0)
+    moved = receive.getActualTCPPose()[2] - start[2]
+    assert moved == pytest.approx(0.010, abs=0.001)
+    held = receive.getActualTCPPose()
+    time.sleep(0.3)
+    assert np.linalg.norm(np.subtract(receive.getActualTCPPose()[:3], held[:3])) < 1e-4
+
+
+def test_servoL_tracks_a_streamed_line_and_servoStop_holds(clients) -> None:
+    control, receive = clients
+    start = receive.getActualTCPPose()
+    worst = 0.0
+    for k in range(1, 251):  # 0.5 s of a 20 mm/s line in y, one target every 2 ms
+        period = control.initPeriod()
+        target = [start[0], start[1] + 0.02 * k * 0.002, *start[2:]]
+        control.servoL(target, 0.0, 0.0, 0.002, 0.1, 300.0)
+        if k > 10:
+            actual = receive.getActualTCPPose()
+            worst = max(worst, abs(actual[1] - (target[1] - 0.02 * 0.01)))
+        control.waitPeriod(period)
+    control.servoStop(2.0)
+    assert worst < 1e-3
+    held = receive.getActualTCPPose()
+    time.sleep(0.3)
+    assert np.linalg.norm(np.subtract(receive.getActualTCPPose()[:3], held[:3])) < 1e-4
+
+
+def test_the_twin_answers_reachability_and_safety_limits(clients) -> None:
+    control, receive = clients
+    pose = receive.getActualTCPPose()
+    assert control.getInverseKinematicsHasSolution(pose)
+    assert control.isPoseWithinSafetyLimits(pose)
+    assert not control.getInverseKinematicsHasSolution([3.0, 0.0, 0.3, *pose[3:]])
+    assert receive.getSafetyMode() == 1
