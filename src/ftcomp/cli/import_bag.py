@@ -29,6 +29,13 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--base-frame", required=True, metavar="B", help="the robot's base")
     parser.add_argument("--sensor-frame", required=True, metavar="S", help="the F/T frame")
     parser.add_argument(
+        "--wrench-frame",
+        metavar="F",
+        help="the frame the readings are in, whatever their header.frame_id says (a warning "
+        "when it disagrees): e.g. netft_rdt_driver stamps sensor-frame readings 'base_link'; "
+        "give --wrench-frame S (default: the header's frame_id)",
+    )
+    parser.add_argument(
         "--urdf",
         metavar="ROBOT.urdf",
         help="take the sensor's pose from this robot description and --joint-states "
@@ -114,6 +121,7 @@ def run(args: argparse.Namespace) -> int:
         still=still,
         urdf=args.urdf,
         joint_states_topic=args.joint_states,
+        wrench_frame=args.wrench_frame,
     )
     print_warnings(result.warnings)
     out = console()

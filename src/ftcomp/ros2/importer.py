@@ -9,7 +9,10 @@ segment. :func:`write_bag_samples` writes them as a sample CSV that ``ftcomp cal
 the topic (the sample reader ignores ``t_ns`` as an extra column and reads ``t``).
 
 A wrench in another frame than the sensor frame is moved into it when a *fixed* transform joins
-the two (static tf, or only fixed joints in the URDF); otherwise it is an error.
+the two (static tf, or only fixed joints in the URDF); otherwise it is an error. Drivers do not all
+fill ``header.frame_id`` with the frame the readings are in: the ATI ``netft_rdt_driver``
+publishes sensor-frame readings stamped ``base_link`` by default, some leave it empty.
+``wrench_frame`` states the readings' frame; a header that disagrees is then a warning.
 """
 
 from __future__ import annotations
@@ -105,18 +108,22 @@ def _fixed_pose(
     """Pose of ``frame`` in the sensor frame, when a fixed transform joins them."""
     problem = f"{source}: readings on {topic} are in frame {frame!r}, not the sensor frame "
     problem += f"{sensor_frame!r}"
+    hint = (
+        " (if the driver stamps sensor-frame readings with another frame_id, as "
+        "netft_rdt_driver's default 'base_link', give --wrench-frame)"
+    )
     if tree is not None:
         if frame not in tree.frames:
-            raise InputFileError(f"{problem}, and {frame!r} is not in the tf tree")
+            raise InputFileError(f"{problem}, and {frame!r} is not in the tf tree{hint}")
         if not tree.is_static(sensor_frame, frame):
-            raise InputFileError(f"{problem}, and the transform between them is not static")
+            raise InputFileError(f"{problem}, and the transform between them is not static{hint}")
         p, R, _ = tree.lookup(sensor_frame, frame, np.zeros(1, dtype=np.int64))
         return p[0], R[0]
     assert urdf is not None
     chain = UrdfChain(urdf, sensor_frame, frame)
     if chain.joint_names:
         raise InputFileError(
-            f"{problem}, and joints {', '.join(chain.joint_names)} move between them"
+            f"{problem}, and joints {', '.join(chain.joint_names)} move between them{hint}"
         )
     T = chain.forward({}, 1)[0]
     return T[:3, 3], Rotation.from_matrix(T[:3, :3])
@@ -131,6 +138,7 @@ def import_bag(
     still: StillConfig | None = None,
     urdf: str | os.PathLike[str] | None = None,
     joint_states_topic: str | None = None,
+    wrench_frame: str | None = None,
 ) -> BagImport:
     """Read a bag and keep the readings of its still segments (see the module docstring).
 
@@ -143,6 +151,8 @@ def import_bag(
         urdf: with ``joint_states_topic``: take the pose from the joint states and this robot
             description instead of ``/tf``.
         joint_states_topic: the ``sensor_msgs/msg/JointState`` topic (with ``urdf``).
+        wrench_frame: the frame the readings are in, whatever their ``header.frame_id`` says
+            (default: the header's).
 
     Raises:
         InputFileError: an unreadable bag, a missing topic or frame, a wrench in an unexpected
@@ -156,7 +166,7 @@ def import_bag(
     urdf_path = Path(urdf) if urdf is not None else None
     tree: TransformTree | None = None
     with open_bag(path) as reader:
-        series = read_wrenches(reader, wrench_topic, source)
+        series = read_wrenches(reader, wrench_topic, source, wrench_frame)
         if urdf_path is None:
             tree = read_transforms(reader, source)
             frames = tree.chain(base_frame, sensor_frame)
@@ -176,7 +186,8 @@ def import_bag(
     if not frame:
         raise InputFileError(
             f"{source}: readings on {wrench_topic} have an empty header.frame_id; "
-            f"expected the sensor frame {sensor_frame!r}"
+            f"expected the sensor frame {sensor_frame!r} (state the readings' frame with "
+            "--wrench-frame)"
         )
     if frame == sensor_frame:
         note = f"readings in the sensor frame {sensor_frame!r}"
@@ -215,7 +226,7 @@ def import_bag(
         readings_without_pose=int(np.count_nonzero(~valid)),
         unsettled=unsettled,
         still=config,
-        warnings=series.warnings,
+        warnings=(*reader.warnings, *series.warnings),
     )
 
 
