@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from ruamel.yaml import YAML
 from scipy.spatial.transform import Rotation
 
@@ -95,3 +97,72 @@ def test_yaml_doubles_always_read_back_as_doubles(value: float, text: str) -> No
 def test_a_frame_name_with_yaml_syntax_is_refused() -> None:
     with pytest.raises(ParameterError, match="world frame 'base link'"):
         ros2_control_parameters(TILTED, world_frame="base link", sensor_frame="s")
+
+
+NAME_OPTIONS = ("world_frame", "sensor_frame", "sensor_name", "broadcaster", "admittance")
+
+
+def _names_read_back(params: dict, names: dict[str, str]) -> dict[str, object]:
+    """Every name as a YAML 1.2 parser reads it back from the exported file."""
+    broadcaster = params[names["broadcaster"]]["ros__parameters"]
+    admittance = params[names["admittance"]]["ros__parameters"]
+    gc = broadcaster["sensor_filter_chain"]["filter1"]["params"]
+    return {
+        "broadcaster frame_id": broadcaster["frame_id"],
+        "broadcaster sensor_name": broadcaster["sensor_name"],
+        "filter world_frame": gc["world_frame"],
+        "filter sensor_frame": gc["sensor_frame"],
+        "admittance sensor name": admittance["ft_sensor"]["name"],
+        "admittance world frame": admittance["fixed_world_frame"]["frame"]["id"],
+    }
+
+
+@pytest.mark.parametrize("name", ["yes", "no", "on", "null", "true", "Null", "nan", "inf", "y"])
+def test_names_that_yaml_reads_as_other_types_are_written_as_strings(name: str) -> None:
+    names = {**dict.fromkeys(NAME_OPTIONS, name), "admittance": name + "_admittance"}
+    read = _names_read_back(_load(ros2_control_parameters(TILTED, **names)), names)
+    for value in read.values():
+        assert value == name and isinstance(value, str)
+
+
+def test_the_two_controllers_may_not_share_a_name() -> None:
+    with pytest.raises(ParameterError, match="admittance controller name 'c'"):
+        ros2_control_parameters(
+            TILTED, world_frame="b", sensor_frame="s", broadcaster="c", admittance="c"
+        )
+
+
+@pytest.mark.parametrize(
+    "name", ["~", "1", "0x1F", "*x", "&a", "!x", "%x", "@x", "-", "|x", "a b", "a:", "/a", "a/"]
+)
+def test_a_name_that_is_not_a_ros_name_is_refused(name: str) -> None:
+    with pytest.raises(ParameterError, match=r"world frame .*: not a valid ROS name"):
+        ros2_control_parameters(TILTED, world_frame=name, sensor_frame="s")
+
+
+#: Any printable text, ROS-valid names, and the words YAML 1.1 reads as booleans or null.
+NAMES = st.one_of(
+    st.text(st.characters(min_codepoint=32, max_codepoint=126), max_size=12),
+    st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,6}(/[A-Za-z_][A-Za-z0-9_]{0,4}){0,2}", fullmatch=True),
+    st.sampled_from(["yes", "No", "ON", "off", "y", "n", "null", "Null", "true", "False"]),
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(names=st.fixed_dictionaries(dict.fromkeys(NAME_OPTIONS, NAMES)))
+def test_any_printable_name_is_refused_or_read_back_by_yaml_1_2_as_that_string(
+    names: dict[str, str],
+) -> None:
+    try:
+        text = ros2_control_parameters(TILTED, **names)
+    except ParameterError:
+        return
+    params = _load(text)
+    assert names["broadcaster"] in params and names["admittance"] in params
+    read = _names_read_back(params, names)
+    assert read["filter world_frame"] == read["admittance world frame"] == names["world_frame"]
+    for key in ("broadcaster frame_id", "filter sensor_frame"):
+        assert read[key] == names["sensor_frame"]
+    for key in ("broadcaster sensor_name", "admittance sensor name"):
+        assert read[key] == names["sensor_name"]
+    assert all(isinstance(v, str) for v in read.values())

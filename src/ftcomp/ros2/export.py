@@ -18,11 +18,17 @@ What ros-controls computes (read from their code, versions in ``docs/ros2.md``):
 
 Numbers are written with ``repr`` (shortest round trip) and always as doubles (``1.0e-05``, never
 ``1e-05``, which a YAML 1.1 parser reads as a string), so the YAML holds the calibration exactly.
+Names are checked against ROS's rules (:func:`check_ros_name`: frames and topics are tokens of
+letters, digits and ``_`` not starting with a digit, joined by ``/``; controller names are one
+such token) and written double-quoted, keys too, so that no name reads back as anything but a
+string (``yes``, ``null``, ``on`` are valid ROS names and YAML 1.1 booleans or nulls).
 """
 
 from __future__ import annotations
 
+import json
 import math
+import re
 from collections.abc import Iterable
 
 import numpy as np
@@ -32,7 +38,7 @@ from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 from ftcomp.model import GravityModel
 
-__all__ = ["ros2_control_parameters", "yaml_double"]
+__all__ = ["check_ros_name", "ros2_control_parameters", "yaml_double", "yaml_string"]
 
 #: The parameter definitions this export follows (see docs/ros2.md).
 SOURCES = (
@@ -59,10 +65,32 @@ def _list(values: Iterable[float]) -> str:
     return "[" + ", ".join(yaml_double(float(v)) for v in values) + "]"
 
 
-def _check_name(kind: str, value: str) -> str:
-    if not value or any(c.isspace() or c in ":#{}[],'\"" for c in value):
-        raise ParameterError(f"{kind} {value!r}: must be a non-empty name without spaces or ':#'")
+_TOKEN = r"[A-Za-z_][A-Za-z0-9_]*"
+_PATTERNS = {
+    "frame": (
+        re.compile(rf"{_TOKEN}(/{_TOKEN})*"),
+        "tokens of letters, digits and _ not "
+        "starting with a digit, joined by '/', e.g. base_link or ur/tool0",
+    ),
+    "node": (re.compile(_TOKEN), "letters, digits and _, not starting with a digit"),
+}
+
+
+def check_ros_name(kind: str, value: str, rule: str = "frame") -> str:
+    """``value`` when it is a valid ROS name of ``rule`` (``frame`` or ``node``).
+
+    Raises:
+        ParameterError: naming ``kind``, the value and the rule.
+    """
+    pattern, words = _PATTERNS[rule]
+    if pattern.fullmatch(value) is None:
+        raise ParameterError(f"{kind} {value!r}: not a valid ROS name ({words})")
     return value
+
+
+def yaml_string(value: str) -> str:
+    """``value`` double-quoted, so every YAML parser (1.1 or 1.2) reads it as that string."""
+    return json.dumps(value, ensure_ascii=True)
 
 
 def ros2_control_parameters(
@@ -88,17 +116,27 @@ def ros2_control_parameters(
         source: where the calibration came from (a comment).
 
     Raises:
-        ParameterError: a name with spaces or YAML syntax in it.
+        ParameterError: a name that is not a valid ROS name (see :func:`check_ros_name`).
     """
+    check_ros_name("world frame", world_frame)
+    check_ros_name("sensor frame", sensor_frame)
+    check_ros_name("sensor name", sensor_name if sensor_name is not None else sensor_frame)
+    check_ros_name("broadcaster name", broadcaster, "node")
+    check_ros_name("admittance controller name", admittance, "node")
+    if admittance == broadcaster:
+        raise ParameterError(
+            f"admittance controller name {admittance!r} is the broadcaster's name too: one "
+            "YAML key cannot hold both controllers"
+        )
+    q = yaml_string
     names = {
-        "world frame": world_frame,
-        "sensor frame": sensor_frame,
-        "sensor name": sensor_name if sensor_name is not None else sensor_frame,
-        "broadcaster name": broadcaster,
-        "admittance controller name": admittance,
+        "world frame": q(world_frame),
+        "sensor frame": q(sensor_frame),
+        "sensor name": q(sensor_name if sensor_name is not None else sensor_frame),
+        "broadcaster name": q(broadcaster),
+        "admittance controller name": q(admittance),
     }
-    for kind, value in names.items():
-        _check_name(kind, value)
+    world_frame, sensor_frame = names["world frame"], names["sensor frame"]
     g = STANDARD_GRAVITY_MPS2
     mass = model.weight_N / g
     # A weightless tool: no direction to carry the tilt; the filter then subtracts nothing.
@@ -124,12 +162,12 @@ def ros2_control_parameters(
         f"      force: {{{force_offset}}}",
         f"      torque: {{{torque_offset}}}",
         "    # Gravity compensation, published on ~/wrench_filtered: the tool's weight as",
-        f"    # mass * gravity_field in the robot's base frame {world_frame}; the field carries",
-        "    # the identified base tilt.",
+        f"    # mass * gravity_field in the robot's base frame {world_frame}; the field",
+        "    # carries the identified base tilt.",
         "    sensor_filter_chain:",
         "      filter1:",
-        "        type: control_filters/GravityCompensationWrench",
-        "        name: gravity_compensation",
+        '        type: "control_filters/GravityCompensationWrench"',
+        '        name: "gravity_compensation"',
         "        params:",
         f"          world_frame: {world_frame}",
         f"          sensor_frame: {sensor_frame}",
