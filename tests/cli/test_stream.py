@@ -195,6 +195,24 @@ def test_compensation_without_a_pose_source_is_refused(
     assert "gives no pose to compensate with" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("command", ["stream", "run"])
+def test_a_net_ft_biased_at_start_is_refused_with_a_calibration(
+    command: str, tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """bias=1 zeroes the tool's weight; -c would subtract it again (fz = -G, silently)."""
+    cal = tmp_path / "cal.json"
+    save_calibration(cal, calibrate(synthetic_samples(rng, TOOL_MODEL)))
+    out = tmp_path / "log.csv"
+    args = [command, "--robot", "fixed://?rpy_deg=0,0,0", "-c", str(cal), "-o", str(out)]
+    args += ["--control", "admittance", "--dry-run"] if command == "run" else []
+    # 127.0.0.9: nobody answers there; the refusal comes before anything is opened
+    assert main([*args, "--sensor", "netft://127.0.0.9?bias=1", "--seconds", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1, err
+    assert "bias=1" in err and "ftcomp rebias" in err
+    assert not out.exists()
+
+
 def test_stream_with_the_ur_pose_compensates_the_stand_ins_tool_to_zero(
     tmp_path: Path, request: pytest.FixtureRequest, rng: np.random.Generator
 ) -> None:
