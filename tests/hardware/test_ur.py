@@ -197,10 +197,14 @@ def test_pose_and_built_in_sensor_are_converted_to_our_frames(
     with running("fake_ur", host, s.to_json()), open_robot(f"ur://{host}") as robot:
         assert isinstance(robot, URRobot) and robot.version[:2] == (5, 11)
         assert robot.control_period_s == pytest.approx(0.002)  # e-Series: 500 Hz
+        before_ns = time.monotonic_ns()
         pose = robot.pose()
+        after_ns = time.monotonic_ns()
         assert np.allclose(pose.p_base_tcp, p, atol=EXACT, rtol=0)
         assert np.allclose(pose.R_base_tcp, R_tcp.as_matrix(), atol=EXACT, rtol=0)
-        assert abs(pose.t_ns - time.monotonic_ns()) < 50_000_000
+        # Stamped on the host's monotonic clock as it is read: within the call, whatever the
+        # load (ordered against the call, not a fixed number of milliseconds).
+        assert before_ns <= pose.t_ns <= after_ns
         assert robot.settle(1.0) < 0.5  # the stand-in's joints are still
         for options in ("", "?wrench=tcp"):
             with open_sensor(f"ur://{host}{options}", robot) as sensor:
@@ -211,7 +215,8 @@ def test_pose_and_built_in_sensor_are_converted_to_our_frames(
                 again = sensor.read_new()  # nothing, unless a packet came in between
                 assert len(new) == 1 and len(again) <= 1
                 assert all(a.t_ns > new[0].t_ns for a in again)
-                deadline = time.monotonic() + 1.0  # a loaded machine may delay a packet
+                # Wait for the next packet (the event); the ceiling only guards a hang.
+                deadline = time.monotonic() + 30.0
                 while sensor.read().t_ns <= first.t_ns and time.monotonic() < deadline:
                     time.sleep(0.002)
                 assert sensor.read().t_ns > first.t_ns
