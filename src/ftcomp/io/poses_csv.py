@@ -47,10 +47,10 @@ def read_pose_file(path: str | os.PathLike[str]) -> PoseList:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputFileError(f"{source}: cannot read the pose file: {exc}") from exc
     try:  # a cell over csv's field limit (128 KiB) is a bad file, not a crash
-        rows = list(csv.reader(text.splitlines()))
+        cells = list(csv.reader(text.splitlines()))
     except csv.Error as exc:
         raise InputFileError(f"{source}: not a readable pose CSV ({exc})") from None
-    reader = iter(rows)
+    reader = iter(cells)
     header = [h.strip() for h in next(reader, [])]
     found: list[OrientationEncoding] = [
         enc for enc, cols in ENCODING_COLUMNS.items() if all(c in header for c in cols)
