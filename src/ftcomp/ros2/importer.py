@@ -2,7 +2,7 @@
 
 :func:`import_bag` reads a ``WrenchStamped`` topic, puts the sensor's orientation in the base
 frame at each reading's stamp (from ``/tf`` + ``/tf_static``, or from joint states and the URDF),
-finds the still segments (:mod:`ftcomp.ros2.still`) and keeps their readings, one pose id per
+finds the still segments (:mod:`ftcomp.calibration.still`) and keeps their readings, one pose id per
 segment. :func:`write_bag_samples` writes them as a sample CSV that ``ftcomp calibrate`` reads:
 ``pose, t_ns, t, qx, qy, qz, qw, fx, fy, fz, tx, ty, tz`` where ``t_ns`` is the reading's
 ``header.stamp`` in integer nanoseconds (exact) and ``t`` the seconds since the first reading of
@@ -25,11 +25,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from ftcomp.calibration.still import Segment, StillConfig, find_still_segments
 from ftcomp.errors import InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, encode_orientation
 from ftcomp.io.tables import write_table
 from ftcomp.ros2.bag import open_bag, read_joint_states, read_transforms, read_wrenches
-from ftcomp.ros2.still import Segment, StillConfig, find_still_segments
 from ftcomp.ros2.tf import TransformTree
 from ftcomp.ros2.urdf import UrdfChain
 from ftcomp.samples import WRENCH_COLUMNS, Samples
