@@ -166,3 +166,59 @@ def test_any_printable_name_is_refused_or_read_back_by_yaml_1_2_as_that_string(
     for key in ("broadcaster sensor_name", "admittance sensor name"):
         assert read[key] == names["sensor_name"]
     assert all(isinstance(v, str) for v in read.values())
+
+
+def _round_trip(text: str) -> dict:
+    """Load with ruamel's round-trip loader, dump, load again (comments and quotes kept)."""
+    import io
+
+    rt = YAML(typ="rt")
+    first = rt.load(text)
+    out = io.StringIO()
+    rt.dump(first, out)
+    again = rt.load(out.getvalue())
+    assert again == first
+    return _load(out.getvalue())
+
+
+@pytest.mark.parametrize("distro", ["humble", "jazzy", "kilted", "rolling"])
+def test_each_distribution_gets_a_file_that_round_trips_and_says_what_to_add(distro: str) -> None:
+    text = ros2_control_parameters(
+        TILTED, world_frame="base_link", sensor_frame="ft_sensor", distro=distro
+    )
+    params = _round_trip(text)
+    assert f"for ROS 2 {distro}" in text
+    broadcaster = params["force_torque_sensor_broadcaster"]["ros__parameters"]
+    has_chain = "sensor_filter_chain" in broadcaster
+    assert has_chain == (
+        distro != "humble"
+    )  # Humble: no filter chain, no GravityCompensationWrench
+    admittance = params["admittance_controller"]["ros__parameters"]
+    # The admittance section is a fragment: every required parameter the export does not write
+    # is named in the comment above it (admittance_controller_parameters.yaml, no default).
+    required = [
+        "joints", "command_interfaces", "state_interfaces", "chainable_command_interfaces",
+        "kinematics.plugin_name", "kinematics.plugin_package", "kinematics.base",
+        "kinematics.tip", "ft_sensor.name", "ft_sensor.frame.id", "control.frame.id",
+        "fixed_world_frame.frame.id", "gravity_compensation.frame.id",
+        "gravity_compensation.CoG.pos", "admittance.selected_axes", "admittance.mass",
+        "admittance.damping_ratio", "admittance.stiffness",
+    ]  # fmt: skip
+    fragment = text[text.index("A FRAGMENT") :]
+    for name in required:
+        node: object = admittance
+        for key in name.split("."):
+            node = node.get(key) if isinstance(node, dict) else None
+        assert node is not None or name in fragment, name
+
+
+def test_the_chained_admittance_reads_the_broadcasters_interfaces_where_they_exist() -> None:
+    kwargs = {"world_frame": "base_link", "sensor_frame": "ft_sensor", "sensor_name": "tcp_fts"}
+    text = ros2_control_parameters(TILTED, distro="jazzy", chained=True, **kwargs)
+    adm = _round_trip(text)["admittance_controller"]["ros__parameters"]
+    assert adm["ft_sensor"]["name"] == "force_torque_sensor_broadcaster/tcp_fts"
+    assert "the bias removed by its offset" in text
+    with pytest.raises(ParameterError, match="humble's force_torque_sensor_broadcaster"):
+        ros2_control_parameters(TILTED, distro="humble", chained=True, **kwargs)
+    with pytest.raises(ParameterError, match="distro 'iron'"):
+        ros2_control_parameters(TILTED, distro="iron", **kwargs)
