@@ -63,7 +63,7 @@ def test_stream_logs_every_reading_at_the_stand_in_rate_with_the_values_it_serve
             [
                 "stream",
                 "--sensor",
-                f"netft://{host}?http_port=8080",
+                f"netft://{host}?http_port=8080&timeout_s=1",
                 "--seconds",
                 "2",
                 "-o",
@@ -95,7 +95,7 @@ def test_stream_counts_injected_packet_loss_exactly(
                 [
                     "stream",
                     "--sensor",
-                    f"netft://{host}?http_port=8080",
+                    f"netft://{host}?http_port=8080&timeout_s=1",  # room for a loaded runner
                     "--seconds",
                     "1.5",
                     "-o",
@@ -130,7 +130,7 @@ def test_stream_stops_with_a_clear_error_on_a_fault_or_silence_and_keeps_the_log
             [
                 "stream",
                 "--sensor",
-                f"netft://{host}?http_port=8080&timeout_s=0.5",
+                f"netft://{host}?http_port=8080&timeout_s=1",
                 "--seconds",
                 "10",
                 "-o",
@@ -235,9 +235,9 @@ def test_stream_with_the_ur_pose_compensates_the_stand_ins_tool_to_zero(
             [
                 "stream",
                 "--robot",
-                f"ur://{ur}",
+                f"ur://{ur}?timeout_s=2",
                 "--sensor",
-                f"netft://{ft}?http_port=8080",
+                f"netft://{ft}?http_port=8080&timeout_s=1",
                 "-c",
                 str(cal),
                 "--seconds",

@@ -78,10 +78,10 @@ def _check_not_continuous(samples: Samples, poses: int) -> None:
         raise IdentificationError(
             f"{samples.source}: no 'pose' column, and the orientation changes from row to row "
             f"({poses} orientations in {n} rows, median step {step_deg:.2g} deg): a recording "
-            "in motion, not readings at still poses: with a 't' column, ftcomp calibrate "
-            "--still-segments finds the still segments and uses each as one pose "
-            "(ftcomp.calibration.still.still_samples; ftcomp import-bag for bags), or add a "
-            "'pose' column"
+            "in motion, not readings at still poses; cut it into still segments first "
+            "(still-segment detection: ftcomp calibrate --still-segments for any recording with "
+            "a 't' column, ftcomp import-bag for bags) with a pose id each, or add a 'pose' "
+            "column"
         )
 
 
