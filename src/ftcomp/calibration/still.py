@@ -31,7 +31,14 @@ from scipy.spatial.transform import Rotation
 from ftcomp.errors import IdentificationError, ParameterError
 from ftcomp.samples import Samples
 
-__all__ = ["Segment", "StillConfig", "StillSamples", "find_still_segments", "still_samples"]
+__all__ = [
+    "Segment",
+    "StillConfig",
+    "StillSamples",
+    "find_still_segments",
+    "segment_rows",
+    "still_samples",
+]
 
 _NS = 1_000_000_000
 
@@ -60,6 +67,12 @@ class StillConfig:
             value = getattr(self, name)
             if not math.isfinite(value) or value <= 0.0:
                 raise ParameterError(f"still-segment {name} must be finite and > 0, got {value}")
+
+    def why_none(self, unsettled: int) -> str:
+        """The end of a "no still segment" message: how many held orientations never settled,
+        and the thresholds."""
+        extra = f" ({unsettled} held orientations where the wrench never settled)"
+        return (extra if unsettled else "") + f"; thresholds: {self.describe()}"
 
     def describe(self) -> str:
         """The thresholds in one line, for reports."""
@@ -207,6 +220,14 @@ def find_still_segments(
     return segments, unsettled
 
 
+def segment_rows(segments: list[Segment]) -> tuple[NDArray[np.intp], NDArray[np.str_]]:
+    """The recording's rows in the segments, and each row's pose id (``"k + 1"`` for
+    ``segments[k]``)."""
+    rows = np.concatenate([np.arange(s.start, s.stop) for s in segments])
+    ids = np.concatenate([np.full(s.readings, str(k + 1)) for k, s in enumerate(segments)])
+    return rows, ids
+
+
 @dataclass(frozen=True)
 class StillSamples:
     """What :func:`still_samples` kept.
@@ -261,14 +282,10 @@ def still_samples(samples: Samples, config: StillConfig) -> StillSamples:
     rotations = Rotation.from_matrix(samples.R_base_sensor)
     segments, unsettled = find_still_segments(t_ns, rotations, samples.wrench_sensor, config)
     if not segments:
-        extra = f" ({unsettled} held orientations where the wrench never settled)"
         raise IdentificationError(
-            f"{source}: no still segment in {len(t_ns)} readings"
-            + (extra if unsettled else "")
-            + f"; thresholds: {config.describe()}"
+            f"{source}: no still segment in {len(t_ns)} readings{config.why_none(unsettled)}"
         )
-    rows = np.concatenate([np.arange(s.start, s.stop) for s in segments])
-    ids = np.concatenate([np.full(s.readings, str(k + 1)) for k, s in enumerate(segments)])
+    rows, ids = segment_rows(segments)
     kept = Samples(
         wrench_sensor=samples.wrench_sensor[rows],
         R_base_sensor=samples.R_base_sensor[rows],

@@ -21,41 +21,18 @@ def add_still_arguments(parser: argparse.ArgumentParser) -> None:
 
     d = StillConfig()
     still = parser.add_argument_group("still segments")
-    still.add_argument(
-        "--still-angle-deg",
-        type=float,
-        metavar="DEG",
-        default=d.angle_deg,
-        help=f"orientation stays within this of the segment's first [deg] ({d.angle_deg:g})",
-    )
-    still.add_argument(
-        "--still-min-s",
-        type=float,
-        metavar="S",
-        default=d.min_duration_s,
-        help=f"shortest segment [s] ({d.min_duration_s:g})",
-    )
-    still.add_argument(
-        "--still-window-s",
-        type=float,
-        metavar="S",
-        default=d.window_s,
-        help=f"moving-mean window of the settled test [s] ({d.window_s:g})",
-    )
-    still.add_argument(
-        "--still-force-N",
-        type=float,
-        metavar="N",
-        default=d.force_N,
-        help=f"settled: moving mean within this of the segment's [N] ({d.force_N:g})",
-    )
-    still.add_argument(
-        "--still-torque-Nm",
-        type=float,
-        metavar="NM",
-        default=d.torque_Nm,
-        help=f"settled: ... [N*m] ({d.torque_Nm:g})",
-    )
+    for flag, metavar, default, text in (
+        ("--still-angle-deg", "DEG", d.angle_deg, "orientation stays within this of the "
+         "segment's first [deg]"),
+        ("--still-min-s", "S", d.min_duration_s, "shortest segment [s]"),
+        ("--still-window-s", "S", d.window_s, "moving-mean window of the settled test [s]"),
+        ("--still-force-N", "N", d.force_N, "settled: moving mean within this of the "
+         "segment's [N]"),
+        ("--still-torque-Nm", "NM", d.torque_Nm, "settled: ... [N*m]"),
+    ):  # fmt: skip
+        still.add_argument(
+            flag, type=float, metavar=metavar, default=default, help=f"{text} ({default:g})"
+        )
 
 
 def still_config(args: argparse.Namespace) -> StillConfig:

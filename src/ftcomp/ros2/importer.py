@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.calibration.still import Segment, StillConfig, find_still_segments
+from ftcomp.calibration.still import Segment, StillConfig, find_still_segments, segment_rows
 from ftcomp.errors import InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, encode_orientation
 from ftcomp.io.tables import write_table
@@ -204,14 +204,10 @@ def import_bag(
     R_kept = R[np.flatnonzero(valid)]
     segments, unsettled = find_still_segments(t_kept, R_kept, wrench[valid], config)
     if not segments:
-        extra = f" ({unsettled} held orientations where the wrench never settled)"
         raise InputFileError(
-            f"{source}: no still period on {wrench_topic}"
-            + (extra if unsettled else "")
-            + f"; thresholds: {config.describe()}"
+            f"{source}: no still period on {wrench_topic}{config.why_none(unsettled)}"
         )
-    rows = np.concatenate([np.arange(s.start, s.stop) for s in segments])
-    ids = np.concatenate([np.full(s.readings, str(k + 1)) for k, s in enumerate(segments)])
+    rows, ids = segment_rows(segments)
     return BagImport(
         source=source,
         pose_source=pose_source,
