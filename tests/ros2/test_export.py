@@ -140,9 +140,11 @@ def test_a_name_that_is_not_a_ros_name_is_refused(name: str) -> None:
         ros2_control_parameters(TILTED, world_frame=name, sensor_frame="s")
 
 
-#: Any printable text, ROS-valid names, and the words YAML 1.1 reads as booleans or null.
+#: Any printable text (ASCII and Unicode), ROS-valid names, and the words YAML 1.1 reads as
+#: booleans or null.
 NAMES = st.one_of(
     st.text(st.characters(min_codepoint=32, max_codepoint=126), max_size=12),
+    st.text(st.characters(categories=("L", "N", "P", "S", "Zs")), max_size=8),  # any printable
     st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,6}(/[A-Za-z_][A-Za-z0-9_]{0,4}){0,2}", fullmatch=True),
     st.sampled_from(["yes", "No", "ON", "off", "y", "n", "null", "Null", "true", "False"]),
 )
