@@ -120,9 +120,13 @@ def _names_read_back(params: dict, names: dict[str, str]) -> dict[str, object]:
 @pytest.mark.parametrize("name", ["yes", "no", "on", "null", "true", "Null", "nan", "inf", "y"])
 def test_names_that_yaml_reads_as_other_types_are_written_as_strings(name: str) -> None:
     names = {**dict.fromkeys(NAME_OPTIONS, name), "admittance": name + "_admittance"}
-    read = _names_read_back(_load(ros2_control_parameters(TILTED, **names)), names)
-    for value in read.values():
-        assert value == name and isinstance(value, str)
+    text = ros2_control_parameters(TILTED, **names)
+    # YAML 1.2 (ruamel's default) and YAML 1.1 (the rules of ROS's parameter parser, where
+    # yes, on and y are booleans too): the same strings either way.
+    for document in (text, "%YAML 1.1\n---\n" + text):
+        read = _names_read_back(_load(document), names)
+        for value in read.values():
+            assert value == name and isinstance(value, str)
 
 
 def test_the_two_controllers_may_not_share_a_name() -> None:
@@ -159,6 +163,7 @@ def test_any_printable_name_is_refused_or_read_back_by_yaml_1_2_as_that_string(
         text = ros2_control_parameters(TILTED, **names)
     except ParameterError:
         return
+    assert _load(text) == _load("%YAML 1.1\n---\n" + text)  # and YAML 1.1 reads the same
     params = _load(text)
     assert names["broadcaster"] in params and names["admittance"] in params
     read = _names_read_back(params, names)
