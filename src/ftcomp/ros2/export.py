@@ -199,8 +199,13 @@ def ros2_control_parameters(
     F0, M0 = model.force_bias_N, model.torque_bias_Nm
     U, V = math.degrees(model.tilt_U_rad), math.degrees(model.tilt_V_rad)
     axes = "xyz"
-    force_offset = ", ".join(f"{a}: {yaml_double(-v)}" for a, v in zip(axes, F0, strict=True))
-    torque_offset = ", ".join(f"{a}: {yaml_double(-v)}" for a, v in zip(axes, M0, strict=True))
+    # The axis keys quoted too: a YAML 1.1 parser reads a plain y as a boolean.
+    force_offset = ", ".join(
+        f"{yaml_string(a)}: {yaml_double(-v)}" for a, v in zip(axes, F0, strict=True)
+    )
+    torque_offset = ", ".join(
+        f"{yaml_string(a)}: {yaml_double(-v)}" for a, v in zip(axes, M0, strict=True)
+    )
     header = [
         f"# ros2_control parameters from ftcomp {__version__}"
         + (f", calibration {source}" if source else "")
