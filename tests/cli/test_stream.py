@@ -70,10 +70,11 @@ def test_stream_logs_every_reading_at_the_stand_in_rate_with_the_values_it_serve
                 str(out),
             ]
         )
-    assert code == 0
-    assert "lost 0 packets" in capsys.readouterr().out
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert "lost 0 packets" in captured.out, captured.out
     rows = _log(out)
-    assert abs(len(rows) / 2.0 - RATE_HZ) < RATE_TOLERANCE * RATE_HZ
+    assert abs(len(rows) / 2.0 - RATE_HZ) < RATE_TOLERANCE * RATE_HZ, len(rows)
     # Each row is one served tick, in order, to the counts' resolution (0.5 count).
     table = _served(s, round(RATE_HZ * s.max_s))
     resolution = s.wrench_from_counts(np.full(6, 0.5))  # half a count, in N and N*m
