@@ -149,3 +149,52 @@ def test_a_bad_bag_is_one_line_naming_the_problem(
     assert err.startswith("error: ") and err.count("\n") == 1
     assert message in err
     assert not out.exists()
+
+
+def test_a_bag_with_a_service_event_channel_and_an_unknown_type_imports_and_names_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bag = write_bag(recording(), tmp_path / "bag", foreign=True)
+    samples = tmp_path / "s.csv"
+    args = ["import-bag", str(bag), "--wrench-topic", WRENCH_TOPIC, *FRAMES]
+    assert main([*args, "-o", str(samples)]) == 0
+    captured = capsys.readouterr()
+    assert "in 9 still segments" in captured.out
+    assert "example_interfaces/srv/AddTwoInts_Event" in captured.err
+    assert "acme_msgs/msg/GripperState" in captured.err
+    assert "acme_msgs/msg/Finger" in captured.err  # why: the type it names is unknown
+
+
+def test_a_needed_definition_that_cannot_be_parsed_is_shown_with_its_whole_reason(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = "std_msgs/Header header\n---\ngeometry_msgs/Wrench wrench\n"
+    bag = write_bag(recording(), tmp_path / "bag", until_s=0.5, wrench_msgdef=bad)
+    out = tmp_path / "s.csv"
+    args = ["import-bag", str(bag), "--wrench-topic", WRENCH_TOPIC, *FRAMES, "-o", str(out)]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1
+    assert "definition of geometry_msgs/msg/WrenchStamped on topic '/ft_sensor/wrench'" in err
+    assert "---" in err  # the part of the definition rosbags stopped at, not an empty reason
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("header_frame", ["base_link", ""])
+def test_wrench_frame_states_the_frame_a_driver_did_not_put_in_the_header(
+    header_frame: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bag = write_bag(recording(), tmp_path / "bag", wrench_frame=header_frame)
+    samples = tmp_path / "s.csv"
+    args = ["import-bag", str(bag), "--wrench-topic", WRENCH_TOPIC, *FRAMES, "-o", str(samples)]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "--wrench-frame" in err and not samples.exists()
+    assert main([*args, "--wrench-frame", "ft_sensor"]) == 0
+    captured = capsys.readouterr()
+    assert "in 9 still segments" in captured.out
+    assert f"header.frame_id {header_frame!r}" in captured.err
+    assert "taken as in 'ft_sensor'" in captured.err
+    cal = tmp_path / "cal.json"
+    assert main(["calibrate", str(samples), "-o", str(cal)]) == 0
+    _assert_truth_within_3_standard_errors(cal)

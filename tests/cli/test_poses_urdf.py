@@ -154,3 +154,52 @@ def test_kept_poses_keep_their_positions_and_an_unreachable_one_is_warned(
     assert poses.ids[:2] == ("k1", "k2") and len(poses) == 5
     assert poses.positions_base_m is not None
     np.testing.assert_array_equal(poses.positions_base_m, np.tile(high, (5, 1)))
+
+
+@pytest.mark.parametrize("named_xacro", [True, False])
+def test_a_xacro_file_is_named_and_the_way_to_expand_it_given(tmp_path, capsys, named_xacro):
+    urdf = tmp_path / ("robot.urdf.xacro" if named_xacro else "robot.urdf")
+    urdf.write_text(
+        '<?xml version="1.0"?>\n<robot name="ur" xmlns:xacro="http://www.ros.org/wiki/xacro">\n'
+        '  <xacro:include filename="$(find ur_description)/urdf/ur_macro.xacro"/>\n'
+        '  <xacro:ur_robot name="ur" tf_prefix=""/>\n  <link name="world"/>\n</robot>\n'
+    )
+    argv = ["poses", "design", "--count", "9", "--urdf", str(urdf), "--tip-link", "tool0"]
+    assert main([*argv, "-o", str(tmp_path / "o.csv")]) == 2
+    line = _error_line(capsys)
+    assert "a xacro file" in line and "expand it first: xacro" in line
+    assert "is not in the URDF" not in line
+
+
+def test_a_design_whose_best_poses_are_out_of_reach_samples_the_reachable_ones(
+    tmp_path, capsys
+) -> None:
+    """A spherical wrist whose middle joint turns only +-1.6 rad: about half of all
+    orientations are reachable, but the D-optimal design asks for the most tilted ones first.
+    It used to give up after 150 misses (or when most of its own choices missed); now it
+    designs among reachable candidates sampled at random and reports the fraction."""
+    urdf = tmp_path / "wrist.urdf"
+    urdf.write_text(
+        '<robot name="wrist"><link name="base"/><link name="l1"/><link name="l2"/>'
+        '<link name="l3"/><link name="sensor"/>'
+        '<joint name="a" type="continuous"><parent link="base"/><child link="l1"/>'
+        '<origin xyz="0.5 0 0.4" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>'
+        '<joint name="b" type="revolute"><parent link="l1"/><child link="l2"/>'
+        '<origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 1 0"/>'
+        '<limit lower="-1.6" upper="1.6" effort="1" velocity="1"/></joint>'
+        '<joint name="c" type="continuous"><parent link="l2"/><child link="l3"/>'
+        '<origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>'
+        '<joint name="m" type="fixed"><parent link="l3"/><child link="sensor"/>'
+        '<origin xyz="0 0 0" rpy="3.141592653589793 0 0"/></joint></robot>'
+    )
+    out = tmp_path / "o.csv"
+    argv = ["poses", "design", "--count", "9", "--urdf", str(urdf), "--position-mm", "500", "0"]
+    assert main([*argv, "400", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    match = re.search(r"(\d+)% of (\d+) sampled are reachable", printed)
+    assert match is not None, printed
+    assert 20 <= int(match.group(1)) <= 80 and int(match.group(2)) >= 20
+    poses = read_pose_file(out)
+    chain_ik = UrdfIk(UrdfChain(urdf))
+    for R in poses.rotations.as_matrix():  # every designed pose is reachable
+        assert chain_ik.solve(np.array([0.5, 0.0, 0.4]), R) is not None

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import threading
-import time
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +14,7 @@ from ftcomp.cli import main
 from ftcomp.hardware.registry import open_robot
 from ftcomp.io.calibration_json import load_calibration
 from ftcomp.io.samples_csv import read_samples
+from ftcomp.session.hand_guided import ManualRecorder
 
 pytest.importorskip("pynetft")
 pytest.importorskip("rtde_receive")
@@ -82,15 +81,6 @@ def _hand_guided(t0_file: Path, *, max_s: float) -> Scenario:
     )
 
 
-def _kill_after_start(proc: Any, t0_file: Path, delay_s: float) -> None:
-    """Kill ``proc`` ``delay_s`` after the stand-ins' ``t0`` (bounded wait)."""
-    deadline = time.monotonic() + 20.0
-    while not t0_file.exists() and time.monotonic() < deadline:
-        time.sleep(0.01)
-    time.sleep(max(0.0, float(t0_file.read_text()) + delay_s - time.monotonic()))
-    proc.kill()
-
-
 def _stand_ins(ur: str, ft: str, scenario: Scenario) -> Any:
     """The fake UR controller and the fake Net F/T, both serving ``scenario``."""
     return running_all(
@@ -106,9 +96,11 @@ def _manual_args(ur: str, ft: str, out: Path) -> list[str]:
         "record",
         "--manual",
         "--robot",
-        f"ur://{ur}",
+        # Fault limits with room for a loaded 2-core runner (a stand-in may be starved for a
+        # few hundred ms); the faults themselves are tested with their own limits elsewhere.
+        f"ur://{ur}?timeout_s=2",
         "--sensor",
-        f"netft://{ft}?http_port=8080",
+        f"netft://{ft}?http_port=8080&timeout_s=1",
         "--mount",
         "0,0,0,0,0,30",
         "--poses",
@@ -128,8 +120,9 @@ def test_manual_recording_against_the_stand_ins_records_12_poses_and_recovers_th
     out, cal = tmp_path / "s.csv", tmp_path / "cal.json"
     with _stand_ins(ur, ft, scenario):
         code = main(_manual_args(ur, ft, out))
-    printed = capsys.readouterr().out
-    assert code == 0, printed
+    captured = capsys.readouterr()
+    printed = captured.out
+    assert code == 0, printed + captured.err
     assert "ignored: " in printed and "from pose 3" in printed  # the repeat of pose 3
     samples = read_samples(out)
     assert samples.pose is not None and len(set(samples.pose)) == 12
@@ -145,31 +138,37 @@ def test_manual_recording_against_the_stand_ins_records_12_poses_and_recovers_th
 
 
 def test_killing_the_ur_stand_in_mid_recording_keeps_the_poses_so_far(
-    tmp_path: Path, request: pytest.FixtureRequest, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path,
+    request: pytest.FixtureRequest,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     ur, ft = loopback_address(request.node.name, 1), loopback_address(request.node.name, 2)
     scenario = _hand_guided(tmp_path / "t0", max_s=20.0)
     out = tmp_path / "s.csv"
-    with _stand_ins(ur, ft, scenario) as (controller, _):
-        segment = scenario.hold_s + scenario.move_s
-        # Killed while the fourth pose is held (0.45 s into its 0.6 s).
-        after_t0 = scenario.first_hold_s + 2 * segment + scenario.move_s + 0.45
-        killer = threading.Thread(
-            target=_kill_after_start, args=(controller, tmp_path / "t0", after_t0), daemon=True
-        )
-        killer.start()
-        t = time.monotonic()
+    with _stand_ins(ur, ft, scenario) as (controller, netft):
+        # Killed on an event, not after a time: the moment the third pose is recorded (in the
+        # recorder's own cycle, so no later pose can be held long enough to be recorded).
+        step = ManualRecorder.__call__
+
+        def kill_after_the_third_pose(recorder: ManualRecorder, reading: Any) -> Any:
+            result = step(recorder, reading)
+            if len(recorder.records) == 3 and controller.poll() is None:
+                controller.kill()
+                controller.wait()
+            return result
+
+        monkeypatch.setattr(ManualRecorder, "__call__", kill_after_the_third_pose)
         code = main(_manual_args(ur, ft, out))
-        elapsed = time.monotonic() - t
-        killer.join(timeout=5)
+        # Ended by the lost controller while the Net F/T still streams (not by its end).
+        assert netft.poll() is None
     err = capsys.readouterr().err
     assert code == 1
     assert "lost the connection" in err or "no new data" in err, err
     kept = read_samples(out)
     assert kept.pose is not None
     n = len(set(kept.pose))
-    assert 3 <= n <= 4 and f": {n} poses" in err
-    assert elapsed < 15.0
+    assert n == 3 and f": {n} poses" in err
 
 
 def test_an_unreachable_controller_is_one_line_and_exit_2_at_once(
@@ -177,10 +176,9 @@ def test_an_unreachable_controller_is_one_line_and_exit_2_at_once(
 ) -> None:
     nobody = loopback_address(request.node.name)
     out = tmp_path / "s.csv"
-    t = time.monotonic()
     code = main(_manual_args(nobody, nobody, out))
     err = capsys.readouterr().err
+    # Refused (the event the probe reports), not timed out: no second count needed.
     assert code == 2 and "connection refused on port 30004" in err, err
-    # Refused at once; the bound leaves room for starting the command on a busy machine.
-    assert err.count("\n") == 1 and time.monotonic() - t < 5.0
+    assert err.count("\n") == 1
     assert not out.exists()

@@ -63,17 +63,18 @@ def test_stream_logs_every_reading_at_the_stand_in_rate_with_the_values_it_serve
             [
                 "stream",
                 "--sensor",
-                f"netft://{host}?http_port=8080",
+                f"netft://{host}?http_port=8080&timeout_s=1",
                 "--seconds",
                 "2",
                 "-o",
                 str(out),
             ]
         )
-    assert code == 0
-    assert "lost 0 packets" in capsys.readouterr().out
+    captured = capsys.readouterr()
+    assert code == 0, captured.err
+    assert "lost 0 packets" in captured.out, captured.out
     rows = _log(out)
-    assert abs(len(rows) / 2.0 - RATE_HZ) < RATE_TOLERANCE * RATE_HZ
+    assert abs(len(rows) / 2.0 - RATE_HZ) < RATE_TOLERANCE * RATE_HZ, len(rows)
     # Each row is one served tick, in order, to the counts' resolution (0.5 count).
     table = _served(s, round(RATE_HZ * s.max_s))
     resolution = s.wrench_from_counts(np.full(6, 0.5))  # half a count, in N and N*m
@@ -95,7 +96,7 @@ def test_stream_counts_injected_packet_loss_exactly(
                 [
                     "stream",
                     "--sensor",
-                    f"netft://{host}?http_port=8080",
+                    f"netft://{host}?http_port=8080&timeout_s=1",  # room for a loaded runner
                     "--seconds",
                     "1.5",
                     "-o",
@@ -126,27 +127,34 @@ def test_stream_stops_with_a_clear_error_on_a_fault_or_silence_and_keeps_the_log
     s = _scenario(**{fault: 0.8})
     host, out = loopback_address(request.node.name), tmp_path / "log.csv"
     with running("fake_netft", host, "49152", "8080", s.to_json()):
-        t = time.monotonic()
         code = main(
             [
                 "stream",
                 "--sensor",
-                f"netft://{host}?http_port=8080",
+                f"netft://{host}?http_port=8080&timeout_s=1",
                 "--seconds",
                 "10",
                 "-o",
                 str(out),
             ]
         )
-        elapsed = time.monotonic() - t
     err = capsys.readouterr().err
+    # Stopped by the fault (exit 1 and its name), not by the end of --seconds (exit 0).
     assert code == 1 and message in err, err
     assert err.count("\n") == 1 and err.startswith("error: ")
-    assert elapsed < 6.0  # stopped at the fault (0.8 s in), long before the end (10 s)
     rows = _log(out)
-    # What arrived before the fault is kept: 0.8 s of readings, less what came before the
-    # loop's first cycle (connecting, tens of ms; more on a busy machine).
-    assert 0.5 < len(rows) / RATE_HZ <= 0.8 + 0.05
+    # What arrived before the fault is kept, every reading of it: consecutive served ticks,
+    # as many as the command says it logged, none from after the fault (0.8 s of streaming
+    # at the stand-in's rate at most; fewer when connecting took a while on a busy machine).
+    logged = re.search(r"logged (\d+) readings", err)
+    assert logged is not None and int(logged.group(1)) == len(rows) > 0, err
+    table = _served(s, round(RATE_HZ * s.max_s))
+    resolution = s.wrench_from_counts(np.full(6, 0.5))
+    first = np.flatnonzero(np.all(np.abs(table - rows[0, 1:7]) <= resolution, axis=1))
+    assert len(first) == 1
+    ticks = first[0] + np.arange(len(rows))
+    assert np.all(np.abs(table[ticks] - rows[:, 1:7]) <= resolution)
+    assert len(rows) <= 0.8 * RATE_HZ + 1
 
 
 def test_bad_sensor_configurations_are_one_line_and_exit_2_in_bounded_time(
@@ -172,13 +180,12 @@ def test_bad_sensor_configurations_are_one_line_and_exit_2_in_bounded_time(
         ]
     ):
         for i, (uri, message) in enumerate(cases):
-            t = time.monotonic()
             code = main(["stream", "--sensor", uri, "--seconds", "1", "-o", str(tmp_path / f"{i}")])
-            elapsed = time.monotonic() - t
             err = capsys.readouterr().err
+            # The message names the limit that ended the wait (1 s, connect_timeout_s), so the
+            # bound is the URI's, whatever the load: no second count is asserted here.
             assert code == 2 and message in err, (uri, err)
             assert err.count("\n") == 1 and err.startswith("error: "), err
-            assert elapsed < 4.0, (uri, elapsed)  # 1 s connect timeout + starting the command
             assert not (tmp_path / f"{i}").exists()
 
 
@@ -193,6 +200,24 @@ def test_compensation_without_a_pose_source_is_refused(
     fixed = ["--robot", "fixed://"]
     assert main([*args, *fixed, "-o", str(tmp_path / "log.csv")]) == 2
     assert "gives no pose to compensate with" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["stream", "run"])
+def test_a_net_ft_biased_at_start_is_refused_with_a_calibration(
+    command: str, tmp_path: Path, rng: np.random.Generator, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """bias=1 zeroes the tool's weight; -c would subtract it again (fz = -G, silently)."""
+    cal = tmp_path / "cal.json"
+    save_calibration(cal, calibrate(synthetic_samples(rng, TOOL_MODEL)))
+    out = tmp_path / "log.csv"
+    args = [command, "--robot", "fixed://?rpy_deg=0,0,0", "-c", str(cal), "-o", str(out)]
+    args += ["--control", "admittance", "--dry-run"] if command == "run" else []
+    # 127.0.0.9: nobody answers there; the refusal comes before anything is opened
+    assert main([*args, "--sensor", "netft://127.0.0.9?bias=1", "--seconds", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1, err
+    assert "bias=1" in err and "ftcomp rebias" in err
+    assert not out.exists()
 
 
 def test_stream_with_the_ur_pose_compensates_the_stand_ins_tool_to_zero(
@@ -211,9 +236,9 @@ def test_stream_with_the_ur_pose_compensates_the_stand_ins_tool_to_zero(
             [
                 "stream",
                 "--robot",
-                f"ur://{ur}",
+                f"ur://{ur}?timeout_s=2",
                 "--sensor",
-                f"netft://{ft}?http_port=8080",
+                f"netft://{ft}?http_port=8080&timeout_s=1",
                 "-c",
                 str(cal),
                 "--seconds",

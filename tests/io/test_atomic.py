@@ -96,3 +96,18 @@ def test_an_output_folder_with_files_needs_force(tmp_path: Path) -> None:
     (tmp_path / "afile").write_text("")
     with pytest.raises(ParameterError, match="not a folder"):
         prepare_output_dir(tmp_path / "afile", overwrite=True)
+
+
+@pytest.mark.skipif(not Path("/proc/self").exists(), reason="needs /proc")
+def test_a_folder_to_be_made_on_a_pseudo_filesystem_is_refused_even_for_root() -> None:
+    # os.access says yes to root on /proc; only creating a file there tells the truth.
+    with pytest.raises(ParameterError, match="cannot be written"):
+        check_writable("/proc/ftcomp-x/out.csv", overwrite=False)
+    with pytest.raises(ParameterError, match="cannot be written"):
+        prepare_output_dir("/proc/ftcomp-x", overwrite=False)
+
+
+def test_an_output_folder_can_be_checked_without_making_it(tmp_path: Path) -> None:
+    out = tmp_path / "a" / "b"
+    assert prepare_output_dir(out, overwrite=False, create=False) == out
+    assert not (tmp_path / "a").exists()

@@ -53,3 +53,10 @@ def test_a_pose_id_given_at_two_different_orientations_is_an_error_as_in_calibra
     )
     with pytest.raises(InputFileError, match="pose '1' is given twice at different poses"):
         read_pose_file(path)
+
+
+def test_a_field_over_the_csv_limit_is_an_input_error_naming_the_file(tmp_path: Path) -> None:
+    path = tmp_path / "poses.csv"
+    path.write_text("qx,qy,qz,qw,note\n0,0,0,1," + "x" * (129 * 1024) + "\n")
+    with pytest.raises(InputFileError, match=r"poses\.csv: not a readable pose CSV"):
+        read_pose_file(path)

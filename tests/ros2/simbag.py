@@ -223,11 +223,16 @@ def write_bag(
     topics: tuple[str, ...] = (WRENCH_TOPIC, "/tf", "/tf_static", "/joint_states"),
     still: bool = True,
     until_s: float | None = None,
+    foreign: bool = False,
+    wrench_msgdef: str | None = None,
 ) -> Path:
     """Write the recording as a bag: ``storage`` is ``mcap``, ``sqlite3`` or ``ros1``.
 
     ``still=False`` keeps only the wrenches logged during moves; ``until_s`` keeps only the
-    first seconds of the recording.
+    first seconds of the recording. ``foreign`` (rosbag2 only) adds what real bags hold besides:
+    a service-event channel whose definition is a ``.srv`` text (as ``ros2 bag record`` with
+    services can leave it; rosbags cannot parse it) and a custom type whose definition names a
+    type nobody defines. ``wrench_msgdef`` replaces the wrench connection's definition.
     """
     msgs = _Msgs(ros1=storage == "ros1")
     t0 = rec.wrench_t_ns[0]
@@ -265,7 +270,30 @@ def write_bag(
         return path
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
     with Writer2(path, version=9, storage_plugin=plugin) as writer:
-        conns = {t: writer.add_connection(t, types[t], typestore=msgs.store) for t in topics}
+        conns = {}
+        for topic in topics:
+            if topic == WRENCH_TOPIC and wrench_msgdef is not None:
+                hash_ = msgs.store.hash_rihs01(types[topic])
+                given = {"msgdef": wrench_msgdef, "rihs01": hash_}
+                conns[topic] = writer.add_connection(topic, types[topic], **given)
+            else:
+                conns[topic] = writer.add_connection(topic, types[topic], typestore=msgs.store)
+        if foreign:
+            for topic, msgtype, msgdef in FOREIGN:
+                conn = writer.add_connection(topic, msgtype, msgdef=msgdef, rihs01=FAKE_HASH)
+                writer.write(conn, int(t0), bytes(24))
         for topic, t, msg in out:
             writer.write(conns[topic], t, msgs.serialize(msg))
     return path
+
+
+FAKE_HASH = "RIHS01_" + "0" * 64
+#: Connections a real bag holds besides what ftcomp reads: (topic, type, definition).
+FOREIGN = (
+    (
+        "/add_two_ints/_service_event",
+        "example_interfaces/srv/AddTwoInts_Event",
+        "int64 a\nint64 b\n---\nint64 sum\n",
+    ),
+    ("/gripper/state", "acme_msgs/msg/GripperState", "acme_msgs/Finger[] fingers\n"),
+)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from ruamel.yaml import YAML
 from scipy.spatial.transform import Rotation
 
@@ -95,3 +97,135 @@ def test_yaml_doubles_always_read_back_as_doubles(value: float, text: str) -> No
 def test_a_frame_name_with_yaml_syntax_is_refused() -> None:
     with pytest.raises(ParameterError, match="world frame 'base link'"):
         ros2_control_parameters(TILTED, world_frame="base link", sensor_frame="s")
+
+
+NAME_OPTIONS = ("world_frame", "sensor_frame", "sensor_name", "broadcaster", "admittance")
+
+
+def _names_read_back(params: dict, names: dict[str, str]) -> dict[str, object]:
+    """Every name as a YAML 1.2 parser reads it back from the exported file."""
+    broadcaster = params[names["broadcaster"]]["ros__parameters"]
+    admittance = params[names["admittance"]]["ros__parameters"]
+    gc = broadcaster["sensor_filter_chain"]["filter1"]["params"]
+    return {
+        "broadcaster frame_id": broadcaster["frame_id"],
+        "broadcaster sensor_name": broadcaster["sensor_name"],
+        "filter world_frame": gc["world_frame"],
+        "filter sensor_frame": gc["sensor_frame"],
+        "admittance sensor name": admittance["ft_sensor"]["name"],
+        "admittance world frame": admittance["fixed_world_frame"]["frame"]["id"],
+    }
+
+
+@pytest.mark.parametrize("name", ["yes", "no", "on", "null", "true", "Null", "nan", "inf", "y"])
+def test_names_that_yaml_reads_as_other_types_are_written_as_strings(name: str) -> None:
+    names = {**dict.fromkeys(NAME_OPTIONS, name), "admittance": name + "_admittance"}
+    text = ros2_control_parameters(TILTED, **names)
+    # YAML 1.2 (ruamel's default) and YAML 1.1 (the rules of ROS's parameter parser, where
+    # yes, on and y are booleans too): the same strings either way.
+    for document in (text, "%YAML 1.1\n---\n" + text):
+        read = _names_read_back(_load(document), names)
+        for value in read.values():
+            assert value == name and isinstance(value, str)
+
+
+def test_the_two_controllers_may_not_share_a_name() -> None:
+    with pytest.raises(ParameterError, match="admittance controller name 'c'"):
+        ros2_control_parameters(
+            TILTED, world_frame="b", sensor_frame="s", broadcaster="c", admittance="c"
+        )
+
+
+@pytest.mark.parametrize(
+    "name", ["~", "1", "0x1F", "*x", "&a", "!x", "%x", "@x", "-", "|x", "a b", "a:", "/a", "a/"]
+)
+def test_a_name_that_is_not_a_ros_name_is_refused(name: str) -> None:
+    with pytest.raises(ParameterError, match=r"world frame .*: not a valid ROS name"):
+        ros2_control_parameters(TILTED, world_frame=name, sensor_frame="s")
+
+
+#: Any printable text (ASCII and Unicode), ROS-valid names, and the words YAML 1.1 reads as
+#: booleans or null.
+NAMES = st.one_of(
+    st.text(st.characters(min_codepoint=32, max_codepoint=126), max_size=12),
+    st.text(st.characters(categories=("L", "N", "P", "S", "Zs")), max_size=8),  # any printable
+    st.from_regex(r"[A-Za-z_][A-Za-z0-9_]{0,6}(/[A-Za-z_][A-Za-z0-9_]{0,4}){0,2}", fullmatch=True),
+    st.sampled_from(["yes", "No", "ON", "off", "y", "n", "null", "Null", "true", "False"]),
+)
+
+
+@settings(max_examples=200, deadline=None)
+@given(names=st.fixed_dictionaries(dict.fromkeys(NAME_OPTIONS, NAMES)))
+def test_any_printable_name_is_refused_or_read_back_by_yaml_1_2_as_that_string(
+    names: dict[str, str],
+) -> None:
+    try:
+        text = ros2_control_parameters(TILTED, **names)
+    except ParameterError:
+        return
+    assert _load(text) == _load("%YAML 1.1\n---\n" + text)  # and YAML 1.1 reads the same
+    params = _load(text)
+    assert names["broadcaster"] in params and names["admittance"] in params
+    read = _names_read_back(params, names)
+    assert read["filter world_frame"] == read["admittance world frame"] == names["world_frame"]
+    for key in ("broadcaster frame_id", "filter sensor_frame"):
+        assert read[key] == names["sensor_frame"]
+    for key in ("broadcaster sensor_name", "admittance sensor name"):
+        assert read[key] == names["sensor_name"]
+    assert all(isinstance(v, str) for v in read.values())
+
+
+def _round_trip(text: str) -> dict:
+    """Load with ruamel's round-trip loader, dump, load again (comments and quotes kept)."""
+    import io
+
+    rt = YAML(typ="rt")
+    first = rt.load(text)
+    out = io.StringIO()
+    rt.dump(first, out)
+    again = rt.load(out.getvalue())
+    assert again == first
+    return _load(out.getvalue())
+
+
+@pytest.mark.parametrize("distro", ["humble", "jazzy", "kilted", "rolling"])
+def test_each_distribution_gets_a_file_that_round_trips_and_says_what_to_add(distro: str) -> None:
+    text = ros2_control_parameters(
+        TILTED, world_frame="base_link", sensor_frame="ft_sensor", distro=distro
+    )
+    params = _round_trip(text)
+    assert f"for ROS 2 {distro}" in text
+    broadcaster = params["force_torque_sensor_broadcaster"]["ros__parameters"]
+    has_chain = "sensor_filter_chain" in broadcaster
+    assert has_chain == (
+        distro != "humble"
+    )  # Humble: no filter chain, no GravityCompensationWrench
+    admittance = params["admittance_controller"]["ros__parameters"]
+    # The admittance section is a fragment: every required parameter the export does not write
+    # is named in the comment above it (admittance_controller_parameters.yaml, no default).
+    required = [
+        "joints", "command_interfaces", "state_interfaces", "chainable_command_interfaces",
+        "kinematics.plugin_name", "kinematics.plugin_package", "kinematics.base",
+        "kinematics.tip", "ft_sensor.name", "ft_sensor.frame.id", "control.frame.id",
+        "fixed_world_frame.frame.id", "gravity_compensation.frame.id",
+        "gravity_compensation.CoG.pos", "admittance.selected_axes", "admittance.mass",
+        "admittance.damping_ratio", "admittance.stiffness",
+    ]  # fmt: skip
+    fragment = text[text.index("A FRAGMENT") :]
+    for name in required:
+        node: object = admittance
+        for key in name.split("."):
+            node = node.get(key) if isinstance(node, dict) else None
+        assert node is not None or name in fragment, name
+
+
+def test_the_chained_admittance_reads_the_broadcasters_interfaces_where_they_exist() -> None:
+    kwargs = {"world_frame": "base_link", "sensor_frame": "ft_sensor", "sensor_name": "tcp_fts"}
+    text = ros2_control_parameters(TILTED, distro="jazzy", chained=True, **kwargs)
+    adm = _round_trip(text)["admittance_controller"]["ros__parameters"]
+    assert adm["ft_sensor"]["name"] == "force_torque_sensor_broadcaster/tcp_fts"
+    assert "the bias removed by its offset" in text
+    with pytest.raises(ParameterError, match="humble's force_torque_sensor_broadcaster"):
+        ros2_control_parameters(TILTED, distro="humble", chained=True, **kwargs)
+    with pytest.raises(ParameterError, match="distro 'iron'"):
+        ros2_control_parameters(TILTED, distro="iron", **kwargs)

@@ -13,7 +13,7 @@ them, :mod:`ftcomp.compensation` applies them.
   :mod:`.extended`; :mod:`.rebias`: the bias alone from still readings.
 - :mod:`.dynamic`: the tool's inertia tensor from a fast excitation trajectory.
 - :mod:`.design`: D-optimal calibration poses; :mod:`.collect`: static readings at a list of
-  poses from any robot and sensor.
+  poses from any robot and sensor; :mod:`.still`: the still segments of a recording in motion.
 
 The package imports none of its modules (``__all__`` names them), so a command loads only the
 ones it uses.
@@ -32,4 +32,5 @@ __all__ = [
     "mount",
     "outliers",
     "rebias",
+    "still",
 ]

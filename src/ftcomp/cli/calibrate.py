@@ -14,12 +14,13 @@ from rich.table import Table
 from ftcomp.calibration.identify import calibrate
 from ftcomp.calibration_record import Calibration
 from ftcomp.cli.common import add_range_argument, print_warnings
+from ftcomp.cli.still_options import add_still_arguments, print_segments, still_config
 from ftcomp.errors import ParameterError
 from ftcomp.extras import require_extra
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.calibration_json import calibration_to_dict, save_calibration
 from ftcomp.io.samples_csv import read_samples
-from ftcomp.samples import WRENCH_COLUMNS
+from ftcomp.samples import WRENCH_COLUMNS, Samples
 
 __all__ = ["console", "register", "render_calibration", "tilt_not_identified"]
 
@@ -70,6 +71,14 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     add_range_argument(parser)
     parser.add_argument(
+        "--still-segments",
+        action="store_true",
+        help="the file is a recording in motion with a t column (a stream --robot log, any "
+        "log): find the still segments (thresholds below), list them, and use each as one "
+        "pose (default: the rows' pose ids, or orientations, are the poses)",
+    )
+    add_still_arguments(parser)
+    parser.add_argument(
         "--json",
         action="store_true",
         help="print the calibration file's content as JSON on stdout instead of tables "
@@ -100,6 +109,8 @@ def run(args: argparse.Namespace) -> int:
     force_range, torque_range = args.range if args.range else (None, None)
     samples = read_samples(args.samples, force_range_N=force_range, torque_range_Nm=torque_range)
     print_warnings(samples.warnings)
+    if args.still_segments:
+        samples = _still_segments(samples, args)
     extended = args.bias_drift != "none" or args.identify_mount is not None
     if extended and args.method != "joint":
         raise ParameterError("--bias-drift and --identify-mount need --method joint")
@@ -132,6 +143,23 @@ def run(args: argparse.Namespace) -> int:
             out.print(f"report written to [bold]{args.report}[/bold]")
     print_warnings(w for w in result.warnings if w not in samples.warnings)
     return 0
+
+
+def _still_segments(samples: Samples, args: argparse.Namespace) -> Samples:
+    """The still segments' readings, one pose each; the segments listed (on stderr with
+    --json, so that stdout stays JSON)."""
+    from ftcomp.calibration.still import still_samples
+
+    found = still_samples(samples, still_config(args))
+    out = Console(stderr=True) if args.json else console()
+    title = f"Still segments in {samples.source}"
+    print_segments(out, title, found.segments, found.t0_ns, found.config)
+    out.print(
+        f"kept {len(found.samples)} of {found.readings_total} readings in "
+        f"{len(found.segments)} still segments (one pose each); {found.unsettled} held "
+        "orientation(s) never settled"
+    )
+    return found.samples
 
 
 def tilt_not_identified(result: Calibration) -> str | None:

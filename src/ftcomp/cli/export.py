@@ -13,11 +13,15 @@ __all__ = ["register", "run"]
 def register(parser: argparse.ArgumentParser) -> None:
     """Add the ``export`` command's arguments to its parser."""
     parser.description = (
-        "Write a calibration as parameters a ros2_control user loads as they are: the "
-        "force_torque_sensor_broadcaster's offsets (the bias) with a "
-        "control_filters/GravityCompensationWrench filter (tool mass, centre of gravity, gravity "
-        "in the base frame with the identified tilt), and the admittance_controller's gravity "
-        "compensation (which can express neither tilt nor bias)."
+        "Write a calibration as ros2_control parameters: the force_torque_sensor_broadcaster "
+        "section loads as it is (its offsets remove the bias; on Jazzy and later a "
+        "control_filters/GravityCompensationWrench filter removes the tool's gravity in the "
+        "base frame with the identified tilt). The admittance_controller section is a FRAGMENT "
+        "to merge into your admittance configuration: it sets the F/T sensor and the tool's "
+        "gravity (without tilt, and without bias unless --chained); add joints, "
+        "command_interfaces, state_interfaces, chainable_command_interfaces, kinematics "
+        "(plugin_name, plugin_package, base, tip), control.frame.id and the admittance gains "
+        "(selected_axes, mass, damping_ratio, stiffness), as the file's comment lists."
     )
     parser.add_argument("target", choices=("ros2",), help="what to export to")
     parser.add_argument(
@@ -56,6 +60,20 @@ def register(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="controller name of the admittance controller (admittance_controller)",
     )
+    parser.add_argument(
+        "--distro",
+        choices=("humble", "jazzy", "kilted", "rolling"),
+        default="jazzy",
+        help="the ROS 2 distribution: humble has no broadcaster filter chain and no "
+        "GravityCompensationWrench (the file then has the offsets and the admittance gravity "
+        "only); jazzy and later have both (default: jazzy)",
+    )
+    parser.add_argument(
+        "--chained",
+        action="store_true",
+        help="the admittance controller reads the broadcaster's exported interfaces, the bias "
+        "removed by its offsets (jazzy and later; default: the sensor's raw interfaces)",
+    )
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
     parser.set_defaults(handler=run)
 
@@ -76,6 +94,8 @@ def run(args: argparse.Namespace) -> int:
         broadcaster=args.broadcaster_name,
         admittance=args.admittance_name,
         source=str(args.calibration),
+        distro=args.distro,
+        chained=args.chained,
     )
     atomic_write_text(output, text)
     print(f"ros2_control parameters written to {output}")

@@ -51,7 +51,8 @@ def add_hardware_arguments(parser: argparse.ArgumentParser, *, robot_required: b
         "--sensor",
         required=True,
         metavar="URI",
-        help="the F/T sensor: sim://, netft://HOST, ur://HOST (built-in), replay://FILE",
+        help="the F/T sensor: sim://, netft://HOST, ur://HOST (built-in), replay://FILE "
+        "(netft://HOST?bias=1 zeroes the tool's weight: refused with -c, use ftcomp rebias)",
     )
     parser.add_argument(
         "--mount",
@@ -78,8 +79,10 @@ def open_hardware(
 ) -> Iterator[tuple[Robot, WrenchSensor, Mount]]:
     """Open and enter the robot (then ``check_robot(robot)``), then the sensor; leave both
     (motion stopped first) at the end."""
+    from ftcomp.hardware.netft import check_bias_and_calibration
     from ftcomp.hardware.registry import open_robot, open_sensor
 
+    check_bias_and_calibration(args.sensor, getattr(args, "calibration", None))
     mount = mount_of(args)
     with ExitStack() as stack:
         robot = stack.enter_context(open_robot(args.robot or NO_ROBOT))

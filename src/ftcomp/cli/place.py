@@ -135,7 +135,9 @@ def _run(args: argparse.Namespace) -> int:
         k2_m_per_s_N=k2_m,
     )
     inputs = [args.calibration] if args.calibration is not None else []
-    prepare_output_dir(args.out, overwrite=args.force, inputs=inputs)
+    # Checked now, made once every input has been accepted (a bad --load-kg or calibration
+    # leaves no folder behind).
+    prepare_output_dir(args.out, overwrite=args.force, inputs=inputs, create=False)
     given = load_calibration(args.calibration) if args.calibration is not None else None
     if given is not None:
         warn_live_drift(given, args.calibration)
@@ -145,6 +147,7 @@ def _run(args: argparse.Namespace) -> int:
         seed=args.seed,
         identify_samples_per_pose=None if given is not None else IDENTIFY_SAMPLES_PER_POSE,
     )
+    prepare_output_dir(args.out, overwrite=args.force, inputs=inputs)
     calibration = given if given is not None else cell.identified
     assert calibration is not None  # identified on the cell when none was given
     model = calibration.model

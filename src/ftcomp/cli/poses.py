@@ -123,22 +123,34 @@ def _position_m(position_mm: list[float]) -> NDArray[np.float64]:
     return p
 
 
-#: A design gives up (bounded time: each unreachable candidate costs every IK start and a new
-#: design round) after this many unreachable candidates, or after ``_FEW`` when most of those
-#: checked are unreachable.
-_MAX_UNREACHABLE = 150
+#: The design checks the candidates it chooses, round after round; a D-optimal design prefers the
+#: most tilted orientations, the ones an arm reaches least, so after ``_FEW`` unreachable ones it
+#: stops asking and samples instead: candidates in a seeded random order, until it has
+#: ``_POOL_PER_POSE`` reachable ones per designed pose (and ``_MIN_SAMPLE`` for the fraction) or
+#: has checked ``_MAX_SAMPLE`` (the time bound: each check is one inverse kinematics, tens of ms
+#: when out of reach), and designs among the reachable ones found. The sample gives the
+#: reachable fraction, which is reported.
 _FEW = 20
+_POOL_PER_POSE = 4
+_MIN_SAMPLE = 20
+_MAX_SAMPLE = 200
+
+
+class _BudgetSpentError(Exception):
+    """The design's own choices missed ``_FEW`` times: sample the candidates instead."""
 
 
 class _Reach:
     """``R -> bool``: whether the tip reaches an orientation at one position ``p`` [m]; counts
-    the candidates checked and stops a design that finds too few reachable ones."""
+    the candidates checked, remembers the answers, and estimates the reachable fraction."""
 
     def __init__(self, source: str, who: str, p: NDArray[np.float64]) -> None:
         self.source = source  # the option naming the check, for messages
         self.who = who  # what checks, for the warnings
         self.p = p
         self.checked = self.reached = 0
+        self.sampled = self.sampled_reached = 0
+        self._known: dict[bytes, bool] = {}
 
     def reaches(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> bool:
         """Whether the tip reaches orientation ``R`` at ``p`` [m]."""
@@ -148,27 +160,64 @@ class _Reach:
         """What checks, for the summary."""
         raise NotImplementedError
 
+    def _check(self, R: NDArray[np.float64]) -> bool:
+        key = np.asarray(R, dtype=float).tobytes()
+        if key not in self._known:  # the design asks again for what a round before chose
+            self.checked += 1
+            self._known[key] = self.reaches(self.p, R)
+            self.reached += self._known[key]
+        return self._known[key]
+
     def __call__(self, R: NDArray[np.float64]) -> bool:
-        self.checked += 1
-        ok = self.reaches(self.p, R)
-        self.reached += ok
-        missed = self.checked - self.reached
-        if missed >= _MAX_UNREACHABLE or (missed >= _FEW and missed > self.reached):
-            raise ParameterError(
-                f"{self.source}: {missed} of the {self.checked} candidate "
-                f"orientations checked are out of reach with the tip at "
-                f"{np.round(self.p, 4).tolist()} m; too few reachable ones to design from: "
-                "give a --position-mm where the arm turns the tip more freely, or a smaller "
-                "--max-tilt-deg"
-            )
+        ok = self._check(R)
+        if self.checked - self.reached >= _FEW:
+            raise _BudgetSpentError
         return ok
 
+    def reachable_sample(self, candidates: NDArray[np.float64], count: int) -> NDArray[np.float64]:
+        """The reachable candidates among a seeded random sample (and those found before).
+
+        Raises:
+            ParameterError: fewer than ``count`` reachable ones (with the fraction).
+        """
+        order = np.random.default_rng(0).permutation(len(candidates))[:_MAX_SAMPLE]
+        pool = [R for R in candidates if self._known.get(np.asarray(R).tobytes(), False)]
+        for j in order:
+            if len(pool) >= _POOL_PER_POSE * count and self.sampled >= _MIN_SAMPLE:
+                break
+            self.sampled += 1
+            ok = self._check(candidates[j])
+            self.sampled_reached += ok
+            if ok and not any(np.array_equal(candidates[j], R) for R in pool):
+                pool.append(candidates[j])
+        if len(pool) < count:
+            raise ParameterError(
+                f"{self.source}: {self.sampled - self.sampled_reached} of {self.sampled} "
+                "candidate orientations sampled at random are out of reach with the tip at "
+                f"{np.round(self.p, 4).tolist()} m ({self.fraction()} reachable); too few "
+                f"reachable ones for --count {count}: give a --position-mm where the arm turns "
+                "the tip more freely, or a smaller --max-tilt-deg"
+            )
+        return np.asarray(pool)
+
+    def fraction(self) -> str:
+        """The reachable fraction of the random sample, as text."""
+        if not self.sampled:
+            return "no sample"
+        return f"{self.sampled_reached / self.sampled:.0%} of {self.sampled}"
+
     def summary(self) -> str:
-        return (
+        text = (
             f"reachability: {self.describe()}, tip at {np.round(self.p, 4).tolist()} m: "
             f"{self.reached} of {self.checked} candidate orientations checked reached by "
             "inverse kinematics"
         )
+        if self.sampled:
+            text += (
+                f"; the design's own choices missed {_FEW} times, so it chose among reachable "
+                f"candidates sampled at random: {self.fraction()} sampled are reachable"
+            )
+        return text
 
 
 class _UrdfReach(_Reach):
@@ -284,7 +333,12 @@ def _design(
     R_keep = kept.rotations.as_matrix().reshape(-1, 3, 3) if kept is not None else None
     theta = nominal_theta()
     candidates = candidate_orientations(args.max_tilt_deg)
-    designed = design_poses(args.count, candidates, theta, keep=R_keep, reachable=reach)
+    try:
+        designed = design_poses(args.count, candidates, theta, keep=R_keep, reachable=reach)
+    except _BudgetSpentError:
+        assert reach is not None
+        pool = reach.reachable_sample(candidates, args.count)
+        designed = design_poses(args.count, pool, theta, keep=R_keep)
     n_keep = 0 if R_keep is None else len(R_keep)
     R_all = designed if R_keep is None else np.concatenate([R_keep, designed])
     order = order_for_travel(R_all, fixed_prefix=n_keep)

@@ -6,7 +6,8 @@ URI::
           ?http_port=80           the sensor's web server (its configuration, netftapi2.xml)
           &timeout_s=0.1          silence longer than this is a fault [s]
           &connect_timeout_s=2    longest wait for the configuration and the first sample [s]
-          &bias=0|1               zero the sensor (RDT software bias) after connecting
+          &bias=0|1               zero the sensor (RDT software bias) after connecting;
+                                  refused with a calibration (see below)
 
 ``pynetft`` reads the sensor's calibration over HTTP (counts per force and torque unit and the
 units themselves) and streams RDT records over UDP. This backend converts every reading, once,
@@ -22,6 +23,12 @@ a device status other than healthy or a monitor warning, silence beyond ``timeou
 or backward sequence, or a storm of malformed packets ends it, and the next :meth:`read` raises
 :class:`~ftcomp.errors.HardwareError` with the fault's name. Packets lost on the way are
 counted from the RDT sequence numbers (:attr:`NetFTSensor.lost_packets`).
+
+``bias=1`` zeroes the reading at the pose the tool is in when the stream starts, gravity
+included; a calibration (``-c calibration.json``) then subtracts the tool's weight a second time
+(with nothing touching, a 0.34 kg tool reads fz = -3.35 N). :func:`check_bias_and_calibration`
+refuses the pair: use the calibration's own bias (drop ``bias=1``), or re-bias the calibration
+gravity-aware at any still pose with ``ftcomp rebias``.
 """
 
 from __future__ import annotations
@@ -36,12 +43,18 @@ import numpy as np
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.pacing import on_host_clock
 from ftcomp.hardware.protocols import Robot, StreamHealth, WrenchSample, WrenchSensor
-from ftcomp.hardware.registry import Uri
+from ftcomp.hardware.registry import Uri, parse_uri
 
 if TYPE_CHECKING:
     import pynetft
 
-__all__ = ["FORCE_UNITS_N", "TORQUE_UNITS_NM", "NetFTSensor", "open_sensor"]
+__all__ = [
+    "FORCE_UNITS_N",
+    "TORQUE_UNITS_NM",
+    "NetFTSensor",
+    "check_bias_and_calibration",
+    "open_sensor",
+]
 
 #: Newtons per force unit, by the unit's label in the sensor's configuration.
 FORCE_UNITS_N: dict[str, float] = {
@@ -63,6 +76,30 @@ TORQUE_UNITS_NM: dict[str, float] = {
 #: Readings kept for :meth:`NetFTSensor.read_new` between two calls (about 10 s at 7 kHz).
 _BACKLOG = 70_000
 _DEFAULT_RDT_PORT = 49152
+
+
+def check_bias_and_calibration(sensor_uri: str, calibration: str | None) -> None:
+    """Refuse a ``netft://...?bias=1`` sensor used with a calibration file (module docstring).
+
+    Args:
+        sensor_uri: the ``--sensor`` URI (any scheme; only ``netft://`` with ``bias=1`` counts).
+        calibration: the calibration file given, or None.
+
+    Raises:
+        ParameterError: both are given.
+    """
+    if calibration is None:
+        return
+    uri = parse_uri(sensor_uri)
+    if uri.scheme != "netft":
+        return
+    flag = uri.options.get("bias", "0").lower()
+    if flag in ("1", "true", "yes"):
+        raise ParameterError(
+            f"{sensor_uri!r}: bias=1 zeroes the sensor with the tool's weight in it and "
+            f"{calibration} would subtract that weight again; drop bias=1 (the calibration's "
+            "bias is used), or re-bias the calibration at a still pose: ftcomp rebias"
+        )
 
 
 def _import_pynetft() -> Any:

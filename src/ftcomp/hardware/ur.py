@@ -11,6 +11,7 @@ URI::
         &connect_timeout_s=2      longest wait for the controller to answer [s]
 
     --sensor ur://HOST?wrench=raw|tcp&sign=1|-1     the built-in sensor (:mod:`.ur_sensor`)
+             &tcp_offset_mm=X,Y,Z&tcp_rotvec_rad=RX,RY,RZ  the TCP offset (wrench=tcp, e-Series)
 
 Frames and units, converted once here: the controller reports the TCP pose as ``[x, y, z, rx,
 ry, rz]`` in the base frame (metres, rotation vector): ``p_base_tcp`` and
@@ -18,9 +19,12 @@ ry, rz]`` in the base frame (metres, rotation vector): ``p_base_tcp`` and
 takes them. The built-in sensor gives ``wrench=raw`` (default): ``ft_raw_wrench`` (PolyScope 5.9
 or later), the raw, payload-uncompensated reading in the tool flange frame: with a TCP offset
 configured on the controller, give ``--mount`` the flange frame seen from the TCP.
-``wrench=tcp``: ``actual_TCP_force``, compensated for the controller's payload setting and
-expressed in the *base* frame at the TCP; it is rotated here into the TCP frame
-(``R_base_tcp.T``), so the sensor frame is the TCP frame (identity mount). ``sign=-1`` flips
+``wrench=tcp``: ``actual_TCP_force``, compensated for the controller's payload setting, in
+*base* orientation; on an e-Series (major version 5 or later) it is the wrench about the
+*flange* origin (as UR's own ROS drivers read it), on a CB3 about the TCP. It is converted here
+into the TCP frame about the TCP origin, with the controller's TCP offset given in the URI on an
+e-Series (:func:`ftcomp.hardware.ur_sensor.tcp_wrench_from_flange`), so the sensor frame is the
+TCP frame (identity mount). ``sign=-1`` flips
 the reading, for a controller whose convention is the force on the tool rather than by it:
 check with a hanging tool that ``fz`` is +weight when the flange points down.
 

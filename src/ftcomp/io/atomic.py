@@ -45,12 +45,13 @@ def _writable_folder(folder: Path, what: Path) -> None:
         probe = probe.parent
     if probe.exists() and not probe.is_dir():
         raise ParameterError(f"{what}: cannot be written: {probe} is a file, not a folder")
-    if not folder.exists():
-        if not os.access(probe, os.W_OK | os.X_OK):
-            raise ParameterError(f"{what}: cannot be written: no permission to create {folder}")
-        return
-    try:  # the only sure test: create a file there (catches read-only and pseudo filesystems)
-        fd, name = tempfile.mkstemp(prefix=".ftcomp-probe-", dir=folder)
+    if not folder.exists() and not os.access(probe, os.W_OK | os.X_OK):
+        raise ParameterError(f"{what}: cannot be written: no permission to create {folder}")
+    # The only sure test: create a file there, or in the nearest folder that exists when the
+    # folder is still to be made (catches read-only and pseudo filesystems such as /proc, where
+    # even root's os.access says yes and mkdir then fails).
+    try:
+        fd, name = tempfile.mkstemp(prefix=".ftcomp-probe-", dir=probe)
     except OSError as exc:
         raise ParameterError(f"{what}: cannot be written ({exc.strerror})") from None
     os.close(fd)
@@ -85,8 +86,17 @@ def check_writable(path: PathLike, *, overwrite: bool, inputs: Iterable[PathLike
     return target
 
 
-def prepare_output_dir(path: PathLike, *, overwrite: bool, inputs: Iterable[PathLike] = ()) -> Path:
+def prepare_output_dir(
+    path: PathLike, *, overwrite: bool, inputs: Iterable[PathLike] = (), create: bool = True
+) -> Path:
     """Check (and create) an output folder; a non-empty one needs ``overwrite``.
+
+    Args:
+        path: the folder.
+        overwrite: whether a folder holding files may be written into (``--force``).
+        inputs: the command's input files: the folder may not hold one of them.
+        create: make the folder now; False only checks, for a command that has more input to
+            check before it may leave anything behind (it makes the folder when it writes).
 
     Raises:
         ParameterError: the path is a file, holds files without ``overwrite``, holds one of the
@@ -104,7 +114,11 @@ def prepare_output_dir(path: PathLike, *, overwrite: bool, inputs: Iterable[Path
             "name are replaced)"
         )
     _writable_folder(out, out)
-    out.mkdir(parents=True, exist_ok=True)
+    if create:
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ParameterError(f"{out}: cannot be created ({exc.strerror})") from None
     return out
 
 

@@ -46,7 +46,11 @@ def read_pose_file(path: str | os.PathLike[str]) -> PoseList:
         text = Path(path).read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise InputFileError(f"{source}: cannot read the pose file: {exc}") from exc
-    reader = csv.reader(text.splitlines())
+    try:  # a cell over csv's field limit (128 KiB) is a bad file, not a crash
+        cells = list(csv.reader(text.splitlines()))
+    except csv.Error as exc:
+        raise InputFileError(f"{source}: not a readable pose CSV ({exc})") from None
+    reader = iter(cells)
     header = [h.strip() for h in next(reader, [])]
     found: list[OrientationEncoding] = [
         enc for enc, cols in ENCODING_COLUMNS.items() if all(c in header for c in cols)

@@ -2,8 +2,8 @@
 
 - :mod:`.bag` reads ROS 2 (MCAP, sqlite3) and ROS 1 bags through rosbags; :mod:`.tf` looks up
   recorded ``/tf`` at any stamp; :mod:`.urdf` gives the sensor's pose from joint states and a
-  URDF (pytransform3d's parser); :mod:`.still` finds still segments; :mod:`.importer` turns a bag
-  into calibration samples (``ftcomp import-bag``).
+  URDF (pytransform3d's parser); :mod:`.importer` turns a bag into calibration samples
+  (``ftcomp import-bag``) with the still segments of :mod:`ftcomp.calibration.still`.
 - :mod:`.export` writes a calibration as ros2_control parameters (``ftcomp export ros2``).
 - :mod:`.mcap_log` logs control loops as MCAP in the ROS 2 profile (``sim place --log``).
 - :mod:`.live` and :mod:`.dds_types`: ``ros2://`` topics over Cyclone DDS (experimental; the

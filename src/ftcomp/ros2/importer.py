@@ -2,14 +2,17 @@
 
 :func:`import_bag` reads a ``WrenchStamped`` topic, puts the sensor's orientation in the base
 frame at each reading's stamp (from ``/tf`` + ``/tf_static``, or from joint states and the URDF),
-finds the still segments (:mod:`ftcomp.ros2.still`) and keeps their readings, one pose id per
+finds the still segments (:mod:`ftcomp.calibration.still`) and keeps their readings, one pose id per
 segment. :func:`write_bag_samples` writes them as a sample CSV that ``ftcomp calibrate`` reads:
 ``pose, t_ns, t, qx, qy, qz, qw, fx, fy, fz, tx, ty, tz`` where ``t_ns`` is the reading's
 ``header.stamp`` in integer nanoseconds (exact) and ``t`` the seconds since the first reading of
 the topic (the sample reader ignores ``t_ns`` as an extra column and reads ``t``).
 
 A wrench in another frame than the sensor frame is moved into it when a *fixed* transform joins
-the two (static tf, or only fixed joints in the URDF); otherwise it is an error.
+the two (static tf, or only fixed joints in the URDF); otherwise it is an error. Drivers do not all
+fill ``header.frame_id`` with the frame the readings are in: the ATI ``netft_rdt_driver``
+publishes sensor-frame readings stamped ``base_link`` by default, some leave it empty.
+``wrench_frame`` states the readings' frame; a header that disagrees is then a warning.
 """
 
 from __future__ import annotations
@@ -22,11 +25,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from ftcomp.calibration.still import Segment, StillConfig, find_still_segments, segment_rows
 from ftcomp.errors import InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, encode_orientation
 from ftcomp.io.tables import write_table
 from ftcomp.ros2.bag import open_bag, read_joint_states, read_transforms, read_wrenches
-from ftcomp.ros2.still import Segment, StillConfig, find_still_segments
 from ftcomp.ros2.tf import TransformTree
 from ftcomp.ros2.urdf import UrdfChain
 from ftcomp.samples import WRENCH_COLUMNS, Samples
@@ -105,18 +108,22 @@ def _fixed_pose(
     """Pose of ``frame`` in the sensor frame, when a fixed transform joins them."""
     problem = f"{source}: readings on {topic} are in frame {frame!r}, not the sensor frame "
     problem += f"{sensor_frame!r}"
+    hint = (
+        " (if the driver stamps sensor-frame readings with another frame_id, as "
+        "netft_rdt_driver's default 'base_link', give --wrench-frame)"
+    )
     if tree is not None:
         if frame not in tree.frames:
-            raise InputFileError(f"{problem}, and {frame!r} is not in the tf tree")
+            raise InputFileError(f"{problem}, and {frame!r} is not in the tf tree{hint}")
         if not tree.is_static(sensor_frame, frame):
-            raise InputFileError(f"{problem}, and the transform between them is not static")
+            raise InputFileError(f"{problem}, and the transform between them is not static{hint}")
         p, R, _ = tree.lookup(sensor_frame, frame, np.zeros(1, dtype=np.int64))
         return p[0], R[0]
     assert urdf is not None
     chain = UrdfChain(urdf, sensor_frame, frame)
     if chain.joint_names:
         raise InputFileError(
-            f"{problem}, and joints {', '.join(chain.joint_names)} move between them"
+            f"{problem}, and joints {', '.join(chain.joint_names)} move between them{hint}"
         )
     T = chain.forward({}, 1)[0]
     return T[:3, 3], Rotation.from_matrix(T[:3, :3])
@@ -131,6 +138,7 @@ def import_bag(
     still: StillConfig | None = None,
     urdf: str | os.PathLike[str] | None = None,
     joint_states_topic: str | None = None,
+    wrench_frame: str | None = None,
 ) -> BagImport:
     """Read a bag and keep the readings of its still segments (see the module docstring).
 
@@ -143,6 +151,8 @@ def import_bag(
         urdf: with ``joint_states_topic``: take the pose from the joint states and this robot
             description instead of ``/tf``.
         joint_states_topic: the ``sensor_msgs/msg/JointState`` topic (with ``urdf``).
+        wrench_frame: the frame the readings are in, whatever their ``header.frame_id`` says
+            (default: the header's).
 
     Raises:
         InputFileError: an unreadable bag, a missing topic or frame, a wrench in an unexpected
@@ -156,7 +166,7 @@ def import_bag(
     urdf_path = Path(urdf) if urdf is not None else None
     tree: TransformTree | None = None
     with open_bag(path) as reader:
-        series = read_wrenches(reader, wrench_topic, source)
+        series = read_wrenches(reader, wrench_topic, source, wrench_frame)
         if urdf_path is None:
             tree = read_transforms(reader, source)
             frames = tree.chain(base_frame, sensor_frame)
@@ -176,7 +186,8 @@ def import_bag(
     if not frame:
         raise InputFileError(
             f"{source}: readings on {wrench_topic} have an empty header.frame_id; "
-            f"expected the sensor frame {sensor_frame!r}"
+            f"expected the sensor frame {sensor_frame!r} (state the readings' frame with "
+            "--wrench-frame)"
         )
     if frame == sensor_frame:
         note = f"readings in the sensor frame {sensor_frame!r}"
@@ -193,14 +204,10 @@ def import_bag(
     R_kept = R[np.flatnonzero(valid)]
     segments, unsettled = find_still_segments(t_kept, R_kept, wrench[valid], config)
     if not segments:
-        extra = f" ({unsettled} held orientations where the wrench never settled)"
         raise InputFileError(
-            f"{source}: no still period on {wrench_topic}"
-            + (extra if unsettled else "")
-            + f"; thresholds: {config.describe()}"
+            f"{source}: no still period on {wrench_topic}{config.why_none(unsettled)}"
         )
-    rows = np.concatenate([np.arange(s.start, s.stop) for s in segments])
-    ids = np.concatenate([np.full(s.readings, str(k + 1)) for k, s in enumerate(segments)])
+    rows, ids = segment_rows(segments)
     return BagImport(
         source=source,
         pose_source=pose_source,
@@ -215,7 +222,7 @@ def import_bag(
         readings_without_pose=int(np.count_nonzero(~valid)),
         unsettled=unsettled,
         still=config,
-        warnings=series.warnings,
+        warnings=(*reader.warnings, *series.warnings),
     )
 
 

@@ -63,11 +63,22 @@ def _read(path: str | Path) -> tuple[set[str], list[Joint]]:
     except (OSError, UnicodeDecodeError) as exc:
         why = exc.strerror if isinstance(exc, OSError) else "not UTF-8 text"
         raise InputFileError(f"{path}: cannot read the URDF ({why})") from None
+    if _is_xacro(path, text):
+        raise InputFileError(
+            f"{path}: a xacro file (macros, not a URDF); expand it first: "
+            f"xacro {path} > robot.urdf (ros2 run xacro xacro, or pip install xacro), with the "
+            "arguments your launch file passes, then give robot.urdf"
+        )
     try:
         _name, links, joints = parse_urdf(text, strict_check=False)
     except Exception as exc:  # UrdfException, and the XML parser's errors
         raise InputFileError(f"{path}: not a valid URDF ({exc})") from None
     return {str(link.name) for link in links}, list(joints)
+
+
+def _is_xacro(path: str | Path, text: str) -> bool:
+    """A xacro file: named ``*.xacro``, or using the xacro namespace or its elements."""
+    return str(path).endswith(".xacro") or "xmlns:xacro" in text or "<xacro:" in text
 
 
 class UrdfChain:

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from ftcomp.calibration.still import StillConfig, find_still_segments
 from ftcomp.errors import ParameterError
-from ftcomp.ros2.still import StillConfig, find_still_segments
 
 RATE_HZ = 500
 NS = 1_000_000_000

@@ -1,7 +1,10 @@
 """Still segments in a continuous recording: where the sensor held a pose and the wrench settled.
 
-Calibration needs readings at static poses, but a bag records everything: moves, stops, ringing
-after a stop. A *still segment* is found in two steps:
+Calibration needs readings at static poses, but a recording in motion (a ROS bag, a ``stream
+--robot`` log, any user's log with a time column) holds everything: moves, stops, ringing after a
+stop. :func:`find_still_segments` finds the still segments; :func:`still_samples` keeps their
+readings as calibration samples, one pose id per segment (``ftcomp calibrate --still-segments``,
+``ftcomp import-bag``). A *still segment* is found in two steps:
 
 1. **Orientation.** A maximal run of readings whose orientation stays within ``angle_deg`` of
    the run's first reading, lasting at least ``min_duration_s``, with no gap in the readings
@@ -25,9 +28,17 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.errors import ParameterError
+from ftcomp.errors import IdentificationError, ParameterError
+from ftcomp.samples import Samples
 
-__all__ = ["Segment", "StillConfig", "find_still_segments"]
+__all__ = [
+    "Segment",
+    "StillConfig",
+    "StillSamples",
+    "find_still_segments",
+    "segment_rows",
+    "still_samples",
+]
 
 _NS = 1_000_000_000
 
@@ -56,6 +67,12 @@ class StillConfig:
             value = getattr(self, name)
             if not math.isfinite(value) or value <= 0.0:
                 raise ParameterError(f"still-segment {name} must be finite and > 0, got {value}")
+
+    def why_none(self, unsettled: int) -> str:
+        """The end of a "no still segment" message: how many held orientations never settled,
+        and the thresholds."""
+        extra = f" ({unsettled} held orientations where the wrench never settled)"
+        return (extra if unsettled else "") + f"; thresholds: {self.describe()}"
 
     def describe(self) -> str:
         """The thresholds in one line, for reports."""
@@ -201,3 +218,81 @@ def find_still_segments(
             )
         )
     return segments, unsettled
+
+
+def segment_rows(segments: list[Segment]) -> tuple[NDArray[np.intp], NDArray[np.str_]]:
+    """The recording's rows in the segments, and each row's pose id (``"k + 1"`` for
+    ``segments[k]``)."""
+    rows = np.concatenate([np.arange(s.start, s.stop) for s in segments])
+    ids = np.concatenate([np.full(s.readings, str(k + 1)) for k, s in enumerate(segments)])
+    return rows, ids
+
+
+@dataclass(frozen=True)
+class StillSamples:
+    """What :func:`still_samples` kept.
+
+    Attributes:
+        samples: the readings of the still segments, pose ids ``"1"``, ``"2"``, ... by segment,
+            their time stamps kept (``t`` [s]).
+        segments: the segments, in time order (pose id ``k + 1`` for ``segments[k]``; indices
+            into the recording).
+        t0_ns: the recording's first stamp [ns] (``Segment.t_start_ns`` counts on its clock).
+        readings_total: readings in the recording.
+        unsettled: held orientations dropped because the wrench never settled.
+        config: the thresholds used.
+    """
+
+    samples: Samples
+    segments: tuple[Segment, ...]
+    t0_ns: int
+    readings_total: int
+    unsettled: int
+    config: StillConfig
+
+
+def still_samples(samples: Samples, config: StillConfig) -> StillSamples:
+    """The readings of a recording in motion that lie in still segments, one pose per segment.
+
+    Args:
+        samples: a recording with a time column (``t`` [s], non-decreasing) and no pose ids.
+        config: the thresholds.
+
+    Raises:
+        IdentificationError: no ``t`` column, a pose column already, time that goes back, or
+            no still segment (naming the thresholds).
+    """
+    source = samples.source
+    if samples.t is None:
+        raise IdentificationError(
+            f"{source}: still segments need each reading's time: the file has no 't' column"
+        )
+    if samples.pose is not None:
+        raise IdentificationError(
+            f"{source}: has a 'pose' column already; still segments would replace it (drop "
+            "the column to have the poses found from the motion)"
+        )
+    t_ns = np.round(np.asarray(samples.t, dtype=float) * _NS).astype(np.int64)
+    back = np.flatnonzero(np.diff(t_ns) < 0)
+    if back.size:
+        raise IdentificationError(
+            f"{source}: row {int(back[0]) + 2}: t goes back in time; still segments need the "
+            "readings in time order"
+        )
+    rotations = Rotation.from_matrix(samples.R_base_sensor)
+    segments, unsettled = find_still_segments(t_ns, rotations, samples.wrench_sensor, config)
+    if not segments:
+        raise IdentificationError(
+            f"{source}: no still segment in {len(t_ns)} readings{config.why_none(unsettled)}"
+        )
+    rows, ids = segment_rows(segments)
+    kept = Samples(
+        wrench_sensor=samples.wrench_sensor[rows],
+        R_base_sensor=samples.R_base_sensor[rows],
+        encoding=samples.encoding,
+        pose=ids,
+        t=np.asarray(samples.t, dtype=float)[rows],
+        source=source,
+        warnings=samples.warnings,
+    )
+    return StillSamples(kept, tuple(segments), int(t_ns[0]), len(t_ns), unsettled, config)
