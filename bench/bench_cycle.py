@@ -189,7 +189,11 @@ class _Run:
     def __init__(self, ramp_cycles: int) -> None:
         from ftcomp.control import LowPassFilter
         from ftcomp.control.loop import Reading
-        from ftcomp.io.numtext import format_row
+
+        try:  # where the log row's formatting lives (io.timestamps since the layered io)
+            from ftcomp.io.timestamps import format_row
+        except ImportError:
+            from ftcomp.io.numtext import format_row  # type: ignore[attr-defined, no-redef]
 
         self.cycle, self.controller = _setup(ramp_cycles)
         self.settle_filter = LowPassFilter(2.0, DT, order=1, channels=6)
