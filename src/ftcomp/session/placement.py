@@ -403,17 +403,19 @@ class _PlacementLog:
         return float((self.down @ R_base_sensor) @ wrench[:3])
 
     def log(self, r: Reading, velocity: float, f_filt: float) -> None:
-        """Append one row of :data:`COLUMNS`."""
+        """Append one row of :data:`COLUMNS` (``f_filt`` is logged as NaN where the compensated
+        force is not finite)."""
         self.start(r)
         R = r.R_base_sensor
+        f_comp = self.along_gravity(R, r.wrench_contact_sensor)
         self.rows.append(
             (
                 (r.now_ns - self.t0_ns) * 1e-9,
                 self.descent(r.p_base_sensor) * 1e3,
                 velocity * 1e3,
                 self.along_gravity(R, r.wrench_raw_sensor),
-                self.along_gravity(R, r.wrench_contact_sensor),
-                f_filt,
+                f_comp,
+                f_filt if math.isfinite(f_comp) else math.nan,
                 self.cell.true_contact_force_N(),
             )
         )
@@ -434,8 +436,7 @@ class _PlacementLog:
             self.view_state, e = self.view_filter.step(self.view_state, record.error)
         if e is not None and np.all(np.isfinite(e[:3])):
             self.f_filt = float(self.down @ e[:3])  # the error is in the base frame
-        finite = math.isfinite(self.along_gravity(r.R_base_sensor, r.wrench_contact_sensor))
-        self.log(r, velocity, self.f_filt if finite else math.nan)
+        self.log(r, velocity, self.f_filt)
         if record.settled and self.decision_index is None:
             self.decision_index = len(self.rows) - 1
 
