@@ -8,7 +8,9 @@ here adds what was measured about it:
 
 - :class:`Calibration`: the model plus the evidence for it (standard errors, per-pose
   residuals, the paper's Table 3, leave-one-pose-out), and optionally
-- :class:`BiasDrift`: the bias as a polynomial in time (``ftcomp calibrate --bias-drift``), and
+- :class:`BiasDrift`: the bias as a polynomial in time (``ftcomp calibrate --bias-drift linear``
+  or ``quadratic``), or :class:`StochasticBiasDrift`: the bias as a Matérn 3/2 process in time,
+  its smoothed estimate (``--bias-drift stochastic``), and
 - :class:`MountRotation`: the sensor frame in the frame the orientations were recorded in
   (``ftcomp calibrate --identify-mount``);
 - :class:`DynamicCalibration`: the tool's inertia tensor (``ftcomp calibrate-dynamic``).
@@ -18,7 +20,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Final, Literal
+from functools import cached_property
+from typing import ClassVar, Final, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -30,6 +33,7 @@ from ftcomp.model import GravityModel
 
 __all__ = [
     "DRIFT_ORDERS",
+    "AnyBiasDrift",
     "BiasDrift",
     "Calibration",
     "DriftModel",
@@ -38,15 +42,19 @@ __all__ = [
     "MountAxes",
     "MountRotation",
     "StandardErrors",
+    "StochasticBiasDrift",
+    "matern32_correlation",
     "mount_matrix",
 ]
 
 #: The identification methods: the paper's two-stage linear fit, or the joint nonlinear fit.
 Method = Literal["paper", "joint"]
-#: The bias drift models: constant, linear or quadratic in time.
-DriftModel = Literal["none", "linear", "quadratic"]
-#: The polynomial order of each drift model.
+#: The bias drift models: constant, linear or quadratic in time, or a stochastic process.
+DriftModel = Literal["none", "linear", "quadratic", "stochastic"]
+#: The polynomial order of each polynomial drift model (``stochastic`` is not a polynomial).
 DRIFT_ORDERS: Final[dict[str, int]] = {"none": 0, "linear": 1, "quadratic": 2}
+#: Rows of times evaluated at once by :meth:`StochasticBiasDrift.offset` (bounds its memory).
+_OFFSET_BLOCK: Final = 8192
 #: The mount models: a yaw about the recorded frame's z axis, or a full rotation.
 MountAxes = Literal["yaw", "full"]
 
@@ -98,13 +106,181 @@ class BiasDrift:
         """``"linear"`` or ``"quadratic"``."""
         return "linear" if self.order == 1 else "quadratic"
 
+    def outside(self, t_min_s: float, t_max_s: float) -> str | None:
+        """What :meth:`offset` does for times in ``t_min_s .. t_max_s`` [s] beyond the fitted
+        range, as a sentence, or None when they are all within it."""
+        return _outside_sentence(self.name, self.t_min_s, self.t_max_s, t_min_s, t_max_s)
+
     def offset(self, t_s: ArrayLike) -> NDArray[np.float64]:
-        """Bias at ``t_s`` [s] minus the bias at ``t_ref``, shape (N, 6) (or (6,))."""
-        dt = np.asarray(t_s, dtype=float) - self.t_ref_s
+        """Bias at ``t_s`` [s] minus the bias at ``t_ref``, shape (N, 6) (or (6,)).
+
+        Outside the fitted range the polynomial is not extrapolated: the bias holds its value
+        at the nearer end of the range (after the session: the bias at ``t_max_s``)."""
+        t = np.clip(np.asarray(t_s, dtype=float), self.t_min_s, self.t_max_s)
+        dt = t - self.t_ref_s
         out = np.multiply.outer(dt, self.coefficients[0])
         if self.order == 2:
             out += np.multiply.outer(dt * dt, self.coefficients[1])
         return out
+
+
+def matern32_correlation(dt_s: ArrayLike, time_constant_s: float) -> NDArray[np.float64]:
+    """The Matérn 3/2 correlation ``(1 + a) exp(-a)``, ``a = sqrt(3) |dt| / time_constant``.
+
+    The covariance of a once-differentiable stationary process (the bias as a smooth wander):
+    the state-space form is a pair (value, rate) driven by white noise, so a Kalman/RTS
+    smoother and a Gaussian process with this covariance give the same estimates.
+    """
+    a = np.abs(np.asarray(dt_s, dtype=float)) * (math.sqrt(3.0) / time_constant_s)
+    return np.asarray((1.0 + a) * np.exp(-a))
+
+
+def _outside_sentence(
+    name: str, fit_min: float, fit_max: float, t_min: float, t_max: float
+) -> str | None:
+    parts = []
+    if t_min < fit_min:
+        parts.append(f"before {fit_min:.6g} s the bias is held at its first estimate")
+    if t_max > fit_max:
+        parts.append(
+            f"after {fit_max:.6g} s (the end of the calibration) the bias is held at its last "
+            "estimate, not extrapolated (ftcomp rebias catches up with later drift)"
+        )
+    if not parts:
+        return None
+    return (
+        f"times {t_min:.6g} .. {t_max:.6g} s reach beyond the {name} bias drift's range "
+        f"{fit_min:.6g} .. {fit_max:.6g} s: " + "; ".join(parts)
+    )
+
+
+@dataclass(frozen=True)
+class StochasticBiasDrift:
+    """The bias as a stochastic process: a Matérn 3/2 wander per axis around the model's bias.
+
+    Identified jointly with the tool model (``ftcomp calibrate --bias-drift stochastic``,
+    :mod:`ftcomp.calibration.stochastic`): the bias at time ``t`` is the process's smoothed
+    estimate given every pose, ``g(t) = sum_k weights[k] * scale^2 * rho(t - t_knots[k])``
+    (the Gaussian-process form of the Kalman/RTS smoother's mean). Inside ``t_min_s ..
+    t_max_s`` :meth:`offset` is that estimate; after it, the last estimate held (its
+    uncertainty growing as :meth:`offset_std` says), before it the first; never a trend.
+
+    Attributes:
+        t_knots_s: each calibration pose's mean time [s], (P,).
+        weights: ``V^-1 r`` per axis at the knots, (P, 6) [1/N, 1/(N*m)].
+        scale: the wander's standard deviation per axis ``[N]*3 + [N*m]*3``, (6,).
+        time_constant_s: its Matérn 3/2 length scale [s] (shared by the axes).
+        white_noise: the per-pose scatter the fit found beyond the readings' noise, (6,).
+        knot_std: the bias's standard error at each knot, model's tool parameters included,
+            (P, 6).
+        end_std: the same at ``t_max_s``, (6,) (the model's ``F0, M0`` standard errors).
+        t_min_s, t_max_s: the calibration's time range [s]; ``t_ref_s`` is ``t_max_s``.
+    """
+
+    t_knots_s: NDArray[np.float64]
+    weights: NDArray[np.float64]
+    scale: NDArray[np.float64]
+    time_constant_s: float
+    white_noise: NDArray[np.float64]
+    knot_std: NDArray[np.float64]
+    end_std: NDArray[np.float64]
+    t_min_s: float
+    t_max_s: float
+
+    def __post_init__(self) -> None:
+        n = len(self.t_knots_s)
+        if n < 2:
+            raise ParameterError("StochasticBiasDrift needs 2 or more knots")
+        freeze_field(self, "t_knots_s", (n,), finite=True)
+        freeze_field(self, "weights", (n, 6), finite=True)
+        freeze_field(self, "scale", (6,), finite=True)
+        freeze_field(self, "white_noise", (6,), finite=True)
+        freeze_field(self, "knot_std", (n, 6))
+        freeze_field(self, "end_std", (6,))
+        if not (math.isfinite(self.time_constant_s) and self.time_constant_s > 0.0):
+            raise ParameterError(
+                f"StochasticBiasDrift.time_constant_s must be > 0, got {self.time_constant_s}"
+            )
+        if np.any(self.scale < 0.0):
+            raise ParameterError("StochasticBiasDrift.scale must be >= 0 per axis")
+        if not (self.t_min_s <= self.t_max_s):
+            raise ParameterError(
+                f"StochasticBiasDrift: t_min_s {self.t_min_s} is after t_max_s {self.t_max_s}"
+            )
+        if np.any(np.diff(self.t_knots_s) <= 0.0):
+            raise ParameterError("StochasticBiasDrift.t_knots_s must increase")
+
+    #: Not a polynomial: no coefficients (a report listing polynomial terms lists none).
+    order: ClassVar[int] = 0
+
+    @cached_property
+    def _end(self) -> NDArray[np.float64]:
+        """The smoothed wander at ``t_max_s``, (6,)."""
+        return self._smoothed(np.array([self.t_max_s]))[0]
+
+    @property
+    def name(self) -> DriftModel:
+        """``"stochastic"``."""
+        return "stochastic"
+
+    @property
+    def t_ref_s(self) -> float:
+        """The reference time [s]: the end of the calibration (the model's ``F0, M0``)."""
+        return self.t_max_s
+
+    def _smoothed(self, t: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The smoothed wander ``g(t)`` at times within the range, (N, 6)."""
+        out = np.empty((len(t), 6))
+        coef = self.weights * self.scale**2
+        for start in range(0, len(t), _OFFSET_BLOCK):
+            block = t[start : start + _OFFSET_BLOCK]
+            rho = matern32_correlation(block[:, None] - self.t_knots_s, self.time_constant_s)
+            np.dot(rho, coef, out=out[start : start + len(block)])
+        return out
+
+    def offset(self, t_s: ArrayLike) -> NDArray[np.float64]:
+        """Bias at ``t_s`` [s] minus the bias at ``t_ref_s``, shape (N, 6) (or (6,)): the
+        smoothed estimate inside the range, held at its nearer end outside it."""
+        t = np.asarray(t_s, dtype=float)
+        flat = np.clip(t.reshape(-1), self.t_min_s, self.t_max_s)
+        out = self._smoothed(flat) - self._end
+        return out.reshape((*t.shape, 6))
+
+    def offset_std(self, t_s: ArrayLike) -> NDArray[np.float64]:
+        """The bias estimate's standard error at ``t_s`` [s], (N, 6) (or (6,)): the knots'
+        interpolated inside the range; after it, the end's grown by the wander the process
+        allows since (``end_std^2 + 2 scale^2 (1 - rho(t - t_max))``); before it likewise."""
+        t = np.asarray(t_s, dtype=float)
+        flat = t.reshape(-1)
+        inside = np.column_stack(
+            [np.interp(flat, self.t_knots_s, self.knot_std[:, j]) for j in range(6)]
+        )
+        after = np.clip(flat - self.t_max_s, 0.0, None)
+        before = np.clip(self.t_min_s - flat, 0.0, None)
+        grow = 2.0 * (1.0 - matern32_correlation(after + before, self.time_constant_s))
+        held = np.where((after > 0)[:, None], self.end_std, self.knot_std[0])
+        out = np.where(
+            ((after > 0) | (before > 0))[:, None],
+            np.sqrt(held**2 + grow[:, None] * self.scale**2),
+            inside,
+        )
+        return out.reshape((*t.shape, 6))
+
+    def outside(self, t_min_s: float, t_max_s: float) -> str | None:
+        """What :meth:`offset` does for times in ``t_min_s .. t_max_s`` [s] beyond the fitted
+        range, as a sentence (with the uncertainty reached), or None when within it."""
+        text = _outside_sentence(self.name, self.t_min_s, self.t_max_s, t_min_s, t_max_s)
+        if text is None or t_max_s <= self.t_max_s:
+            return text
+        std = self.offset_std(np.array([t_max_s]))[0]
+        return (
+            f"{text}; its standard error grows to {np.max(std[:3]):.3g} N, "
+            f"{np.max(std[3:]):.3g} N·m at {t_max_s:.6g} s"
+        )
+
+
+#: Either drift record: what compensation applies by each reading's time.
+AnyBiasDrift = BiasDrift | StochasticBiasDrift
 
 
 def mount_matrix(phi: NDArray[np.float64], axes: MountAxes | None) -> NDArray[np.float64]:
@@ -159,7 +335,9 @@ class Calibration:
             could not identify the model), shape (P, 6).
         condition_number: of the force regressor (Eq. 7); large means poses too alike.
         warnings: human-readable warnings.
-        bias_drift: the bias as a function of time (``--bias-drift``), or None: constant.
+        bias_drift: the bias as a function of time (``--bias-drift``): a polynomial
+            (:class:`BiasDrift`) or a smoothed process (:class:`StochasticBiasDrift`), or None:
+            constant.
         mount: the sensor frame's rotation in the frame the orientations were recorded in
             (``--identify-mount``), or None: the orientations are the sensor's.
     """
@@ -176,7 +354,7 @@ class Calibration:
     loo_error: NDArray[np.float64] = field(repr=False)
     condition_number: float = math.inf
     warnings: tuple[str, ...] = ()
-    bias_drift: BiasDrift | None = None
+    bias_drift: BiasDrift | StochasticBiasDrift | None = None
     mount: MountRotation | None = None
 
     def __post_init__(self) -> None:

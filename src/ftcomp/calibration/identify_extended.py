@@ -28,6 +28,7 @@ from ftcomp.calibration.identify import (
 )
 from ftcomp.calibration.methods import fit_paper, joint_sigma
 from ftcomp.calibration.mount import MIN_POSES, mount_from_fit, mount_warnings
+from ftcomp.calibration.stochastic import fit_stochastic, pose_times
 from ftcomp.calibration_record import DRIFT_ORDERS, Calibration, DriftModel, MountAxes
 from ftcomp.errors import IdentificationError
 from ftcomp.samples import Samples
@@ -48,17 +49,29 @@ def calibrate_extended(
 
     Args:
         samples: readings at distinct poses; a drift model needs their times (``t``).
-        bias_drift: ``"none"``, ``"linear"`` or ``"quadratic"`` in time.
+        bias_drift: ``"none"``, ``"linear"`` or ``"quadratic"`` in time, or
+            ``"stochastic"`` (:mod:`.stochastic`: a Matérn 3/2 process, smoothed; not with a
+            mount).
         identify_mount: None, ``"yaw"`` (about the recorded frame's z) or ``"full"``; the
             samples' orientations are then the recorded frame's (flange, TCP).
         leave_one_out: each pose predicted (at its time) by a refit to the others.
 
     Raises:
-        IdentificationError: no ``t`` for a drift model, too few poses for the parameters.
+        IdentificationError: no ``t`` for a drift model, too few poses for the parameters,
+            (stochastic) times that go back.
     """
+    if bias_drift == "stochastic":
+        if identify_mount is not None:
+            raise IdentificationError(
+                "--bias-drift stochastic does not combine with --identify-mount (identify the "
+                "mount first, with a constant or polynomial bias)"
+            )
+        return _calibrate_stochastic(samples, leave_one_out=leave_one_out)
     order = DRIFT_ORDERS.get(bias_drift)
     if order is None:
-        raise IdentificationError(f"bias drift must be one of {', '.join(DRIFT_ORDERS)}")
+        raise IdentificationError(
+            f"bias drift must be one of {', '.join([*DRIFT_ORDERS, 'stochastic'])}"
+        )
     if order and samples.t is None:
         raise IdentificationError(
             f"{samples.source}: --bias-drift {bias_drift} needs each reading's time: the file "
@@ -108,6 +121,52 @@ def calibrate_extended(
         warnings=tuple(warnings),
         bias_drift=drift,
         mount=mount,
+    )
+
+
+def _calibrate_stochastic(samples: Samples, *, leave_one_out: bool) -> Calibration:
+    """The joint method with the bias a Matérn 3/2 process (:mod:`.stochastic`)."""
+    t_pose = pose_times(samples)
+    base = calibrate(samples, method="joint", leave_one_out=False)
+    ids, R, wrench, count, var_mean = pose_means(samples)
+    repeated = bool(np.any(count > 1))
+    sigma = (
+        joint_sigma(wrench, R, var_mean, count, fit_paper(wrench, R))
+        if repeated
+        else np.zeros_like(wrench)  # one reading per pose: the white scatter carries the noise
+    )
+    t_all = t_pose if samples.t is None else samples.t  # pose_times checked there is one
+    t_range = (float(t_all.min()), float(t_all.max()))
+    theta0 = np.concatenate(
+        [
+            base.model.gravity_base_N,
+            base.model.force_bias_N,
+            base.model.torque_bias_Nm,
+            base.model.center_of_gravity_m,
+        ]
+    )
+    fit, loo = fit_stochastic(
+        wrench, R, sigma, theta0, t_pose, t_range_s=t_range, source=samples.source
+    )
+    theta = fit.theta.copy()
+    theta[3:9] = fit.end_bias
+    model = model_from_theta(theta)
+    std_errors = standard_errors_from_fit(fit.theta, fit.covariance)
+    std_errors = replace(
+        std_errors,
+        force_bias_N=fit.drift.end_std[:3],
+        torque_bias_Nm=fit.drift.end_std[3:],
+    )
+    residuals = wrench - model.predict(R) - fit.drift.offset(t_pose)
+    return replace(
+        base,
+        model=model,
+        std_errors=std_errors,
+        residuals=residuals,
+        relative_error_percent=relative_error_percent(residuals, wrench),
+        loo_error=loo if leave_one_out else np.full_like(wrench, np.nan),
+        bias_drift=fit.drift,
+        mount=None,
     )
 
 
