@@ -9,8 +9,13 @@ beyond the overload limit also sets a latched ``overloaded`` flag). Readings com
 (1.2 kHz), stamped with the sensor's tick time; the physics state between ticks is held.
 
 Optional realism, off by default: a per-axis gain error (the reading is ``(1 + gain) * ideal``;
-the paper's sensor is specified at +-1.5 %) and a slow bias drift, a constant rate plus a
-random walk (a temperature-like wander), both functions of the sensor's tick time.
+the paper's sensor is specified at +-1.5 %) and a slow bias drift, functions of the sensor's tick
+time: a constant rate, a random walk, a smooth wander (a Matérn 3/2 process with a time constant
+of minutes, what a strain-gauge sensor's zero does as its temperature wanders) and a
+temperature-like warm-up trend ``trend * (1 - exp(-t / tau))``. :meth:`SensorSpec.realistic_drift`
+turns on the wander and the trend at magnitudes seen on real sensors; the wander is drawn on a
+grid of knots from its own seeded generator, so the same seed gives the same drift however the
+sensor is read.
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from ftcomp.arrays import freeze_field
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import NothingToClose, WrenchSample
 
-__all__ = ["SensorSpec", "SimWrenchSensor"]
+__all__ = ["SensorSpec", "SimWrenchSensor", "WanderKnots"]
 
 _NOISE_BLOCK: Final = 4096
 #: Readings a stream keeps for read_new (10 s at the paper's 1.2 kHz).
@@ -60,6 +65,11 @@ class SensorSpec:
             [N*m/sqrt(s)]*3``, shape (6,): after ``t`` seconds the walk's standard deviation is
             this times ``sqrt(t)``; default zeros. Its own generator (seeded from the sensor's
             seed), so turning it on leaves the noise sequence unchanged.
+        bias_wander_std: standard deviation of the smooth wander per axis ``[N]*3 + [N*m]*3``,
+            (6,); default zeros (off).
+        bias_wander_time_constant_s: its Matérn 3/2 time constant [s] (default 300 s).
+        bias_trend: the warm-up trend's final amplitude per axis, (6,); default zeros (off).
+        bias_trend_time_constant_s: its time constant [s] (default 1800 s).
 
     The paper gives no noise figure; the default noise is one resolution count (0.125 N,
     0.003 N*m), which also dithers the quantiser so that means of many readings are unbiased.
@@ -80,9 +90,19 @@ class SensorSpec:
     gain_error_fraction: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
     bias_drift_rate_per_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
     bias_walk_per_sqrt_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    bias_wander_std: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    bias_wander_time_constant_s: float = 300.0
+    bias_trend: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    bias_trend_time_constant_s: float = 1800.0
 
     def __post_init__(self) -> None:
-        positive = ("force_range_N", "torque_range_Nm", "output_rate_Hz")
+        positive = (
+            "force_range_N",
+            "torque_range_Nm",
+            "output_rate_Hz",
+            "bias_wander_time_constant_s",
+            "bias_trend_time_constant_s",
+        )
         percent = ("overload_force_percent", "overload_torque_percent")
         nonnegative = ("resolution_fraction_of_range", "force_noise_std_N", "torque_noise_std_Nm")
         for name in positive:
@@ -101,8 +121,16 @@ class SensorSpec:
             raise ParameterError("SensorSpec.resolution_fraction_of_range must be below 1")
         for name in ("force_bias_N", "torque_bias_Nm"):
             freeze_field(self, name, (3,), finite=True)
-        for name in ("gain_error_fraction", "bias_drift_rate_per_s", "bias_walk_per_sqrt_s"):
+        for name in (
+            "gain_error_fraction",
+            "bias_drift_rate_per_s",
+            "bias_walk_per_sqrt_s",
+            "bias_wander_std",
+            "bias_trend",
+        ):
             freeze_field(self, name, (6,), finite=True)
+        if np.any(self.bias_wander_std < 0.0):
+            raise ParameterError("SensorSpec.bias_wander_std must be >= 0 per axis")
         if np.any(np.abs(self.gain_error_fraction) >= 0.5):
             raise ParameterError("SensorSpec.gain_error_fraction must be within +-0.5 per axis")
         if np.any(self.bias_walk_per_sqrt_s < 0.0):
@@ -110,8 +138,25 @@ class SensorSpec:
 
     @property
     def drifts(self) -> bool:
-        """Whether the bias drifts (a rate or a random walk is set)."""
-        return bool(np.any(self.bias_drift_rate_per_s) or np.any(self.bias_walk_per_sqrt_s))
+        """Whether the bias drifts (a rate, a random walk, a wander or a trend is set)."""
+        return bool(
+            np.any(self.bias_drift_rate_per_s)
+            or np.any(self.bias_walk_per_sqrt_s)
+            or np.any(self.bias_wander_std)
+            or np.any(self.bias_trend)
+        )
+
+    def realistic_drift(self, scale: float = 1.0) -> SensorSpec:
+        """The same sensor with a realistic bias drift: a smooth wander of 0.15 N and 0.003 N*m
+        (time constant 5 min) and a warm-up trend of 0.3 N and 0.005 N*m (time constant
+        30 min), per axis with mixed signs, times ``scale``."""
+        return replace(
+            self,
+            bias_wander_std=scale * np.array([0.15, 0.15, 0.2, 0.003, 0.003, 0.002]),
+            bias_wander_time_constant_s=300.0,
+            bias_trend=scale * np.array([0.3, -0.2, 0.4, 0.005, -0.004, 0.002]),
+            bias_trend_time_constant_s=1800.0,
+        )
 
     def ideal(self) -> SensorSpec:
         """The same sensor without noise and quantisation (bias, range and rate kept)."""
@@ -176,6 +221,47 @@ class SensorSpec:
         return np.clip(reading, -rng, rng), np.asarray(overloaded)
 
 
+class WanderKnots:
+    """A Matérn 3/2 process per axis, drawn exactly on a grid of knots and read between them
+    by linear interpolation (the process is smooth: at a knot spacing of 1/100 of its time
+    constant the interpolation error is below 1e-4 of its size).
+
+    Args:
+        std: its stationary standard deviation per axis, (6,).
+        time_constant_s: its length scale [s].
+        seed: seeds its own generator; knots are drawn in order as time advances, so the
+            values depend on the seed alone.
+    """
+
+    def __init__(self, std: NDArray[np.float64], time_constant_s: float, seed: object) -> None:
+        self.step_s = min(1.0, time_constant_s / 100.0)
+        lam = math.sqrt(3.0) / time_constant_s
+        d = self.step_s
+        e = math.exp(-lam * d)
+        self._phi = e * np.array([[1.0 + lam * d, d], [-lam * lam * d, 1.0 - lam * d]])
+        p_inf = np.diag([1.0, lam * lam])
+        self._q_chol = np.linalg.cholesky(p_inf - self._phi @ p_inf @ self._phi.T + 1e-15 * p_inf)
+        self._std = np.asarray(std, dtype=float)
+        self._rng = np.random.default_rng(seed)  # type: ignore[arg-type]
+        self._state = np.linalg.cholesky(p_inf) @ self._rng.standard_normal((2, 6))  # unit std
+        self._values: list[NDArray[np.float64]] = [self._state[0] * self._std]
+
+    def _extend(self, knots: int) -> None:
+        while len(self._values) < knots:
+            self._state = self._phi @ self._state + self._q_chol @ self._rng.standard_normal((2, 6))
+            self._values.append(self._state[0] * self._std)
+
+    def at(self, t_s: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The wander at times ``t_s`` [s] (>= 0), (N, 6)."""
+        x = np.maximum(np.asarray(t_s, dtype=float), 0.0) / self.step_s
+        k = np.floor(x).astype(int)
+        self._extend(int(k.max()) + 2)
+        values = np.asarray(self._values[int(k.min()) : int(k.max()) + 2])
+        i = k - int(k.min())
+        frac = (x - k)[:, None]
+        return values[i] * (1.0 - frac) + values[i + 1] * frac
+
+
 class SimWrenchSensor(NothingToClose):
     """The simulated sensor: implements :class:`ftcomp.hardware.protocols.WrenchSensor`.
 
@@ -231,6 +317,15 @@ class SimWrenchSensor(NothingToClose):
         self._walk_rng = np.random.default_rng(None if seed is None else [seed, 0x0D21F7])
         self._walk = np.zeros(6)
         self._walk_tick = 0
+        self._wander = (
+            WanderKnots(
+                spec.bias_wander_std,
+                spec.bias_wander_time_constant_s,
+                None if seed is None else [seed, 0x3A7D],
+            )
+            if np.any(spec.bias_wander_std)
+            else None
+        )
 
     @property
     def spec(self) -> SensorSpec:
@@ -268,13 +363,19 @@ class SimWrenchSensor(NothingToClose):
     def drift(self, first_tick: int, n: int) -> NDArray[np.float64]:
         """The bias drift at ticks ``first_tick .. first_tick + n - 1``, shape (n, 6).
 
-        Rate times tick time plus the random walk, advanced tick by tick (a gap since the last
-        call is one step of the same distribution); ticks must not go back.
+        Rate times tick time, the warm-up trend, the smooth wander (a function of the tick
+        time alone) and the random walk, advanced tick by tick (a gap since the last call is one
+        step of the same distribution); ticks must not go back.
         """
         spec = self._spec
         dt = 1.0 / spec.output_rate_Hz
         ticks = first_tick + np.arange(n)
-        out = np.outer(ticks * dt, spec.bias_drift_rate_per_s)
+        t = ticks * dt
+        out = np.outer(t, spec.bias_drift_rate_per_s)
+        if np.any(spec.bias_trend):
+            out += np.outer(-np.expm1(-t / spec.bias_trend_time_constant_s), spec.bias_trend)
+        if self._wander is not None:
+            out += self._wander.at(t)
         if not np.any(spec.bias_walk_per_sqrt_s) or n == 0:
             return out
         scale = spec.bias_walk_per_sqrt_s * math.sqrt(dt)
