@@ -219,6 +219,16 @@ class StochasticBiasDrift:
         return self._smoothed(np.array([self.t_max_s]))[0]
 
     @property
+    def coefficients(self) -> NDArray[np.float64]:
+        """No polynomial coefficients: shape (0, 6)."""
+        return np.zeros((0, 6))
+
+    @property
+    def std_errors(self) -> NDArray[np.float64]:
+        """No polynomial coefficients' standard errors: shape (0, 6)."""
+        return np.zeros((0, 6))
+
+    @property
     def name(self) -> DriftModel:
         """``"stochastic"``."""
         return "stochastic"
@@ -258,11 +268,10 @@ class StochasticBiasDrift:
         after = np.clip(flat - self.t_max_s, 0.0, None)
         before = np.clip(self.t_min_s - flat, 0.0, None)
         grow = 2.0 * (1.0 - matern32_correlation(after + before, self.time_constant_s))
-        held = np.where((after > 0)[:, None], self.end_std, self.knot_std[0])
+        late, early = flat >= self.t_max_s, flat < self.t_min_s
+        held = np.where(late[:, None], self.end_std, self.knot_std[0])
         out = np.where(
-            ((after > 0) | (before > 0))[:, None],
-            np.sqrt(held**2 + grow[:, None] * self.scale**2),
-            inside,
+            (late | early)[:, None], np.sqrt(held**2 + grow[:, None] * self.scale**2), inside
         )
         return out.reshape((*t.shape, 6))
 

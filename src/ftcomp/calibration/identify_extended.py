@@ -128,7 +128,7 @@ def _calibrate_stochastic(samples: Samples, *, leave_one_out: bool) -> Calibrati
     """The joint method with the bias a Matérn 3/2 process (:mod:`.stochastic`)."""
     t_pose = pose_times(samples)
     base = calibrate(samples, method="joint", leave_one_out=False)
-    ids, R, wrench, count, var_mean = pose_means(samples)
+    _, R, wrench, count, var_mean = pose_means(samples)
     repeated = bool(np.any(count > 1))
     sigma = (
         joint_sigma(wrench, R, var_mean, count, fit_paper(wrench, R))

@@ -196,8 +196,8 @@ def fit_stochastic(
     P = len(wrench)
     if P < MIN_POSES:
         raise IdentificationError(
-            f"{source}: {P} poses; --bias-drift stochastic needs at least {MIN_POSES} (12 tool parameters "
-            "and 9 hyperparameters of the drift from 6 numbers per pose)"
+            f"{source}: {P} poses; --bias-drift stochastic needs at least {MIN_POSES} (12 tool "
+            "parameters and 9 hyperparameters of the drift from 6 numbers per pose)"
         )
     problem = _Problem(wrench, R, sigma, t_pose_s)
     problem.linearise(theta0)
@@ -267,7 +267,7 @@ def _result(
     ell, scale, white = _unpack(h)
     L = problem.factor(h)
     _, Jw = problem.whiten(L)
-    cov = np.linalg.pinv(Jw.T @ Jw)
+    cov = np.asarray(np.linalg.pinv(Jw.T @ Jw), dtype=np.float64)
     P, t = problem.P, problem.t
     weights = np.column_stack([cho_solve((L[j], True), problem.r[:, j]) for j in range(6)])
     # Posterior standard error of the bias F0_j + g_j(t*) (universal kriging).

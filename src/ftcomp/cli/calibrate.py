@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ftcomp.calibration.identify import calibrate
-from ftcomp.calibration_record import Calibration
+from ftcomp.calibration_record import Calibration, StochasticBiasDrift
 from ftcomp.cli.common import add_range_argument, print_warnings
 from ftcomp.cli.still_options import add_still_arguments, print_segments, still_config
 from ftcomp.errors import ParameterError
@@ -56,10 +56,12 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--bias-drift",
-        choices=("none", "linear", "quadratic"),
+        choices=("none", "linear", "quadratic", "stochastic"),
         default="none",
-        help="fit the force and torque bias as a polynomial in each reading's time t, with the "
-        "tool model shared; needs a t column (joint method; default: none, a constant bias)",
+        help="fit the force and torque bias as a function of each reading's time t, with the "
+        "tool model shared: a polynomial, or stochastic (a smooth Matérn 3/2 wander, its size "
+        "and time constant from the data, 6+ poses); past the session the bias is held at its "
+        "last estimate; needs a t column (joint method; default: none, a constant bias)",
     )
     parser.add_argument(
         "--identify-mount",
@@ -185,7 +187,18 @@ def tilt_not_identified(result: Calibration) -> str | None:
 def _render_extensions(result: Calibration, console: Console) -> None:
     """The bias drift's rates and the mount's angles, each ± its standard error."""
     drift, mount = result.bias_drift, result.mount
-    if drift is not None:
+    if isinstance(drift, StochasticBiasDrift):
+        std = drift.offset_std(np.array([drift.t_max_s + 600.0]))[0]
+        console.print(
+            f"Bias drift (stochastic, Matérn 3/2, t = {drift.t_min_s:.6g} .. {drift.t_max_s:.6g} "
+            f"s; F0, M0 above are the bias at t = {drift.t_max_s:.6g} s): time constant "
+            f"{drift.time_constant_s:.4g} s, wander "
+            + ", ".join(f"{v:.4g}" for v in drift.scale)
+            + " N|N·m per axis; inside the range the smoothed bias, after it the last estimate "
+            f"held (10 min later its standard error is {np.max(std[:3]):.3g} N, "
+            f"{np.max(std[3:]):.3g} N·m)"
+        )
+    elif drift is not None:
         table = Table(
             title=f"Bias drift ({drift.name}, t = {drift.t_min_s:.6g} .. {drift.t_max_s:.6g} s; "
             f"F0, M0 above are the bias at t = {drift.t_ref_s:.6g} s)"

@@ -1,5 +1,7 @@
 """Gravity compensation: remove what a calibration says the tool and the sensor add.
 
+- :mod:`.bias_tracking`: :class:`~.bias_tracking.BiasTracker`, the bias followed live while
+  the arm is still and nothing touches the tool.
 - :mod:`.compensator`: :class:`~.compensator.GravityCompensator`, bias and tool gravity removed
   at run time (paper Eq. 20-22), with the calibration's mount and bias drift.
 - :mod:`.load`: weighing a grasped load from compensated readings.
@@ -10,4 +12,4 @@ The package imports none of its modules (``__all__`` names them), so a command l
 ones it uses.
 """
 
-__all__ = ["compensator", "inertial", "load", "online"]
+__all__ = ["bias_tracking", "compensator", "inertial", "load", "online"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ftcomp.calibration_record import BiasDrift, Calibration, MountRotation
+from ftcomp.calibration_record import AnyBiasDrift, Calibration, MountRotation
 from ftcomp.errors import ParameterError
 from ftcomp.model import GravityModel, skew
 
@@ -21,14 +21,16 @@ __all__ = ["GravityCompensator"]
 class GravityCompensator:
     """Removes bias and tool gravity from F/T readings.
 
-    Args:
-        calibration: a :class:`~ftcomp.calibration_record.Calibration` (e.g. from
-            :func:`ftcomp.load_calibration`) or a bare :class:`~ftcomp.model.GravityModel`.
+        Args:
+            calibration: a :class:`~ftcomp.calibration_record.Calibration` (e.g. from
+                :func:`ftcomp.load_calibration`) or a bare :class:`~ftcomp.model.GravityModel`.
 
-    A calibration with a mount (``--identify-mount``) takes the orientations of the frame it
-    was recorded in (flange, TCP) and turns them into the sensor's at no extra cost (folded into
-    the constant matrices). One with a bias drift applies it when given each sample's time
-    (``t_s``); without times the bias is the model's, the bias at the end of the calibration.
+        A calibration with a mount (``--identify-mount``) takes the orientations of the frame it
+        was recorded in (flange, TCP) and turns them into the sensor's at no extra cost (folded into
+        the constant matrices). One with a bias drift applies it when given each sample's time
+        (``t_s``, on the recording's clock): a polynomial or the smoothed stochastic bias inside the
+    calibration's time range, the bias at its nearer end outside it (never extrapolated); without
+    times the bias is the model's, the bias at the end of the calibration.
     """
 
     def __init__(self, calibration: Calibration | GravityModel) -> None:
@@ -40,7 +42,7 @@ class GravityCompensator:
         #: The calibration's mount (None: the orientations given are the sensor's).
         self.mount: MountRotation | None = mount
         #: The calibration's bias drift (None: constant bias).
-        self.bias_drift: BiasDrift | None = drift
+        self.bias_drift: AnyBiasDrift | None = drift
         self._gravity_base = model.gravity_base_N.copy()
         self._bias = np.concatenate([model.force_bias_N, model.torque_bias_Nm])
         # [F; M] of the tool gravity = A @ g_s with A = [I; skew(P)] (Eq. 12, 20); with a mount,

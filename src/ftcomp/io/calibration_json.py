@@ -7,7 +7,11 @@ keys), ``residual_rms`` {``force_N``, ``torque_Nm``}, ``relative_error_percent``
 [[6]...], ``mean`` [6]}, ``poses``, and diagnostics (``condition_number``, ``pose_ids``,
 ``per_pose_residuals``, ``leave_one_out``, ``warnings``). Unmeasurable values (a relative error
 where the reading is zero) are ``null``. Optional, when identified: ``bias_drift`` (model,
-``t_ref_s``, ``t_range_s``, coefficients per power of seconds with standard errors) and
+``t_ref_s``, ``t_range_s`` (the validity window: outside it the bias is held at the window's
+nearer end, never extrapolated), then for ``linear``/``quadratic`` the coefficients per power of
+seconds with standard errors, for ``stochastic`` the Matérn 3/2 process: ``time_constant_s``,
+``scale`` [6], ``white_noise`` [6], ``knots_t_s`` [P], ``weights`` [P][6], ``knot_std`` [P][6],
+``end_std`` [6]) and
 ``mount`` (``axes``, ``angles_deg``, ``std_errors_deg``); files without them load as before.
 """
 
@@ -29,9 +33,10 @@ from ftcomp.calibration_record import (
     Calibration,
     MountRotation,
     StandardErrors,
+    StochasticBiasDrift,
     mount_matrix,
 )
-from ftcomp.errors import CalibrationFileError
+from ftcomp.errors import CalibrationFileError, ParameterError
 from ftcomp.io.atomic import atomic_write_text
 from ftcomp.model import GravityModel
 
@@ -125,12 +130,27 @@ def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
     }
 
 
-def _drift_to_dict(drift: BiasDrift) -> dict[str, object]:
-    return {
+def _drift_to_dict(drift: BiasDrift | StochasticBiasDrift) -> dict[str, object]:
+    head: dict[str, object] = {
         "model": drift.name,
         "t_ref_s": drift.t_ref_s,
         "t_range_s": [drift.t_min_s, drift.t_max_s],
+        "outside_range": "held at the nearer end (never extrapolated)",
         "columns": ["fx", "fy", "fz", "tx", "ty", "tz"],
+    }
+    if isinstance(drift, StochasticBiasDrift):
+        return {
+            **head,
+            "time_constant_s": drift.time_constant_s,
+            "scale": drift.scale.tolist(),
+            "white_noise": drift.white_noise.tolist(),
+            "knots_t_s": drift.t_knots_s.tolist(),
+            "weights": drift.weights.tolist(),
+            "knot_std": _json_array(drift.knot_std),
+            "end_std": [v if math.isfinite(v) else None for v in drift.end_std.tolist()],
+        }
+    return {
+        **head,
         "coefficients_per_s_power": drift.coefficients.tolist(),
         "std_errors": [[v if math.isfinite(v) else None for v in r] for r in drift.std_errors],
     }
@@ -377,13 +397,52 @@ def load_calibration(path: str | os.PathLike[str]) -> Calibration:
     )
 
 
-def _drift(data: Any, source: str) -> BiasDrift | None:
+def _stochastic(data: dict[str, Any], source: str) -> StochasticBiasDrift:
+    """A ``bias_drift`` entry of model ``stochastic``."""
+    where = f"{source}: bias_drift"
+    knots = data.get("knots_t_s")
+    n = len(knots) if isinstance(knots, list) else 0
+    arrays = {
+        "knots_t_s": _optional_array(knots, (n,)),
+        "weights": _optional_array(data.get("weights"), (n, 6)),
+        "scale": _optional_array(data.get("scale"), (6,)),
+        "white_noise": _optional_array(data.get("white_noise"), (6,)),
+    }
+    span = data.get("t_range_s")
+    if n < 2 or not isinstance(span, list) or len(span) != 2:
+        raise CalibrationFileError(
+            f"{where}: a stochastic drift needs knots_t_s [2 or more] and t_range_s [2]"
+        )
+    for name, value in arrays.items():
+        if not np.all(np.isfinite(value)):
+            raise CalibrationFileError(f"{where}.{name} must be finite numbers of the right shape")
+    try:
+        return StochasticBiasDrift(
+            t_knots_s=arrays["knots_t_s"],
+            weights=arrays["weights"],
+            scale=arrays["scale"],
+            time_constant_s=_number(data, "time_constant_s", where),
+            white_noise=arrays["white_noise"],
+            knot_std=_optional_array(data.get("knot_std"), (n, 6)),
+            end_std=_optional_array(data.get("end_std"), (6,)),
+            t_min_s=_number({"t": span[0]}, "t", f"{where}.t_range_s"),
+            t_max_s=_number({"t": span[1]}, "t", f"{where}.t_range_s"),
+        )
+    except ParameterError as exc:
+        raise CalibrationFileError(f"{where}: {exc}") from None
+
+
+def _drift(data: Any, source: str) -> BiasDrift | StochasticBiasDrift | None:
     """The optional ``bias_drift`` entry (absent or null: a constant bias)."""
     if data is None:
         return None
+    if isinstance(data, dict) and data.get("model") == "stochastic":
+        return _stochastic(data, source)
     order = DRIFT_ORDERS.get(str(data.get("model"))) if isinstance(data, dict) else None
     if not isinstance(data, dict) or not order:
-        raise CalibrationFileError(f"{source}: 'bias_drift.model' must be linear or quadratic")
+        raise CalibrationFileError(
+            f"{source}: 'bias_drift.model' must be linear, quadratic or stochastic"
+        )
     span = data.get("t_range_s")
     coefficients = _optional_array(data.get("coefficients_per_s_power"), (order, 6))
     if not isinstance(span, list) or len(span) != 2 or not np.all(np.isfinite(coefficients)):

@@ -370,8 +370,8 @@ class SimWrenchSensor(NothingToClose):
         spec = self._spec
         dt = 1.0 / spec.output_rate_Hz
         ticks = first_tick + np.arange(n)
-        t = ticks * dt
-        out = np.outer(t, spec.bias_drift_rate_per_s)
+        t: NDArray[np.float64] = np.asarray(ticks * dt, dtype=np.float64)
+        out: NDArray[np.float64] = np.outer(t, spec.bias_drift_rate_per_s)
         if np.any(spec.bias_trend):
             out += np.outer(-np.expm1(-t / spec.bias_trend_time_constant_s), spec.bias_trend)
         if self._wander is not None:
