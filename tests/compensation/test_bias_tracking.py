@@ -1,0 +1,97 @@
+"""Live bias tracking (BiasTracker), offline with the simulated sensor's realistic drift: a
+calibration used 10 minutes after its session, with and without tracking."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from calibration.drift_data import NOISE_6
+from calibration.sim_drift_data import PER_POSE, session
+from ftcomp.calibration.identify_extended import calibrate_extended
+from ftcomp.compensation.bias_tracking import BiasTracker, BiasTrackingConfig
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.errors import ParameterError
+
+RATE_HZ = 500.0
+
+
+def _still_cycles(seed, model, drift, R, t0_s, seconds, contact=None):
+    """Raw readings of a still arm at ``R`` from ``t0_s`` for ``seconds`` at 500 Hz."""
+    rng = np.random.default_rng(seed)
+    t = t0_s + np.arange(int(seconds * RATE_HZ)) / RATE_HZ
+    w = model.predict(R) + drift(t) + rng.standard_normal((len(t), 6)) * NOISE_6
+    if contact is not None:
+        w = w + contact
+    return t, w
+
+
+def _run(tracker, comp, t, w, R):
+    contact = comp.compensate(w, np.broadcast_to(R, (len(w), 3, 3)))
+    moved = [tracker.update(float(ti), ci, R) for ti, ci in zip(t, contact, strict=True)]
+    return np.array(moved)
+
+
+def test_tracking_keeps_a_calibration_ten_minutes_old_within_twice_the_floor() -> None:
+    model, samples, drift = session(11, 12)
+    result = calibrate_extended(samples, bias_drift="stochastic", leave_one_out=False)
+    comp = GravityCompensator(result)
+    end = result.bias_drift.t_max_s
+    later = end + 600.0
+    floor = NOISE_6[0] / np.sqrt(PER_POSE)
+    R = samples.R_base_sensor[0]
+    true_bias = (
+        np.concatenate([model.force_bias_N, model.torque_bias_Nm]) + drift(np.array([later]))[0]
+    )
+    held = np.concatenate([result.model.force_bias_N, result.model.torque_bias_Nm])
+    without = float(np.linalg.norm(held[:3] - true_bias[:3]) / np.sqrt(3))
+    tracker = BiasTracker(BiasTrackingConfig(), initial_std=result.bias_drift.end_std)
+    tracker.update(end, np.zeros(6), R)  # the session's end; the arm busy until 30 s before
+    t, w = _still_cycles(1, model, drift, R, later - 30.0, 30.0)
+    moved = _run(tracker, comp, t, w, R)
+    assert moved.sum() > 0.9 * len(moved)
+    tracked = held + tracker.correction
+    with_tracking = float(np.linalg.norm(tracked[:3] - true_bias[:3]) / np.sqrt(3))
+    assert with_tracking < 2 * floor
+    assert without > 2 * with_tracking  # what 10 minutes of drift does untracked
+    print(
+        f"10 min after: {without / floor:.1f} floors untracked, {with_tracking / floor:.2f} tracked"
+    )
+
+
+def test_no_update_in_contact_or_while_moving() -> None:
+    model, samples, drift = session(12, 8)
+    result = calibrate_extended(samples, bias_drift="stochastic", leave_one_out=False)
+    comp = GravityCompensator(result)
+    R = samples.R_base_sensor[0]
+    tracker = BiasTracker(BiasTrackingConfig())
+    t, w = _still_cycles(2, model, drift, R, 200.0, 2.0, contact=np.array([0, 0, 5.0, 0, 0, 0]))
+    assert not _run(tracker, comp, t, w, R).any()
+    assert not tracker.correction.any()
+    # Moving: the orientation turns 0.1 rad/s.
+    from scipy.spatial.transform import Rotation
+
+    t, w = _still_cycles(3, model, drift, R, 210.0, 2.0)
+    turning = [Rotation.from_rotvec([0, 0, 0.1 * (ti - 210.0)]).as_matrix() @ R for ti in t]
+    contact = comp.compensate(w, np.broadcast_to(R, (len(w), 3, 3)))
+    assert not any(
+        tracker.update(float(ti), ci, Ri) for ti, ci, Ri in zip(t, contact, turning, strict=True)
+    )
+
+
+def test_the_correction_moves_no_faster_than_its_limit() -> None:
+    config = BiasTrackingConfig(max_rate_force_N_per_s=0.01, contact_force_N=5.0)
+    tracker = BiasTracker(config, initial_std=np.repeat([1.0, 0.01], 3))
+    R = np.eye(3)
+    offset = np.array([0.8, 0, 0, 0, 0, 0])  # a bias step well inside the contact threshold
+    for k in range(1000):
+        tracker.update(k / RATE_HZ, offset, R)
+    # Still from the 2nd cycle, updating from 0.5 s on: at most 0.01 N/s for ~1.5 s.
+    assert 0.0 < tracker.correction[0] <= 0.01 * 2.0 + 1e-12
+
+
+def test_bad_tracking_config_is_a_clear_error() -> None:
+    with pytest.raises(ParameterError, match="still_hold_s"):
+        BiasTrackingConfig(still_hold_s=0.0)
+    with pytest.raises(ParameterError, match="initial_std"):
+        BiasTracker(BiasTrackingConfig(), initial_std=[1.0, 2.0])
