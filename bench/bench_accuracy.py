@@ -1,0 +1,146 @@
+"""Held-out accuracy of each bias model on a real recording and on the simulated realistic drift.
+
+Run by hand (not a test)::
+
+    .venv/bin/python bench/bench_accuracy.py --real DIR [--splits 30]
+    .venv/bin/python bench/bench_accuracy.py --sim [--seeds 5]
+
+``--real DIR``: a directory with ``recorded_messages_pose_100.txt`` (x, y, z, qx, qy, qz, qw:
+the sensor frame in the robot base frame) and ``recorded_messages_wrench_100.txt`` (fx..tz in
+the *base* frame, as recorded there: turned into the sensor frame here) of the public recording
+github.com/leledeyuan00/Gravity-Compensation-F-T-sensor (folder ``datas/``, an ATI Axia80 on an
+arm, 100 static poses in recording order, one reading each; docs/calibration.md). The files
+carry no times: pose k is given ``t = k`` seconds (the recording order is the clock).
+
+For each model (``none``, ``quadratic``, ``stochastic``), calibrate on a random subset of poses
+and predict the others at their times through :func:`ftcomp.calibration.identify_extended.
+calibrate_extended` and :class:`~ftcomp.compensation.compensator.GravityCompensator` (what
+``ftcomp calibrate`` and ``ftcomp compensate`` run), RMS over the held-out poses, median over
+random splits: 9 and 50 training poses anywhere in the session, and "after": 9 of the first 71
+poses predicting the last 29.
+
+``--sim``: the same on recordings with the simulated sensor's realistic drift (30 poses 10 s
+apart, 600 readings each), in units of one pose mean's noise; and a calibration used 10 min
+after its session, the bias held against :class:`~ftcomp.compensation.bias_tracking.BiasTracker`
+after 30 s still.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ftcomp.calibration.identify import calibrate, pose_means
+from ftcomp.calibration.identify_extended import calibrate_extended
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.samples import Samples
+
+MODELS = ("none", "quadratic", "stochastic")
+
+
+def read_real(folder: Path) -> Samples:
+    """The 100-pose recording as samples in the sensor frame, ``t`` = pose index [s]."""
+    pose = np.loadtxt(folder / "recorded_messages_pose_100.txt", delimiter=",")
+    wrench_base = np.loadtxt(folder / "recorded_messages_wrench_100.txt", delimiter=",")
+    R = Rotation.from_quat(pose[:, 3:7]).as_matrix()  # [x, y, z, w]
+    Rt = np.transpose(R, (0, 2, 1))
+    force = np.einsum("nij,nj->ni", Rt, wrench_base[:, :3])
+    torque = np.einsum("nij,nj->ni", Rt, wrench_base[:, 3:])
+    n = len(pose)
+    return Samples(
+        np.hstack([force, torque]),
+        R,
+        "quaternion",
+        pose=np.array([f"p{k}" for k in range(n)]),
+        t=np.arange(n, dtype=float),
+        source=str(folder),
+    )
+
+
+def _pick(samples: Samples, poses: np.ndarray) -> Samples:
+    from dataclasses import replace
+
+    assert samples.pose is not None and samples.t is not None
+    chosen = np.isin(samples.pose, np.array([f"p{k}" for k in poses]))
+    return replace(
+        samples,
+        wrench_sensor=samples.wrench_sensor[chosen],
+        R_base_sensor=samples.R_base_sensor[chosen],
+        pose=samples.pose[chosen],
+        t=samples.t[chosen],
+    )
+
+
+def held_out_rms(samples: Samples, train: np.ndarray, test: np.ndarray, model: str):
+    """Force [N] and torque [N*m] RMS predicting ``test`` poses from ``train`` poses."""
+    fit_on, held = _pick(samples, np.sort(train)), _pick(samples, np.sort(test))
+    if model == "none":
+        result = calibrate(fit_on, leave_one_out=False)
+    else:
+        result = calibrate_extended(fit_on, bias_drift=model, leave_one_out=False)
+    ids, R, wrench, _, _ = pose_means(held)
+    t = np.array([held.t[held.pose == i].mean() for i in ids])
+    e = GravityCompensator(result).compensate(wrench, R, t_s=t)
+    return float(np.sqrt(np.mean(e[:, :3] ** 2))), float(np.sqrt(np.mean(e[:, 3:] ** 2)))
+
+
+def real_table(samples: Samples, splits: int) -> None:
+    rng = np.random.default_rng(0)
+    P = len(np.unique(samples.pose))
+    cases = {
+        "9 poses": lambda: np.split(rng.permutation(P), [9]),
+        "50 poses": lambda: np.split(rng.permutation(P), [50]),
+        "after (9 of first 71)": lambda: (rng.permutation(71)[:9], np.arange(71, P)),
+    }
+    print(f"| model | {' | '.join(cases)} |")
+    print("|---|" + "---|" * len(cases))
+    draws = {name: [make() for _ in range(splits)] for name, make in cases.items()}
+    for model in MODELS:
+        cells = []
+        for name in cases:
+            errors = np.array([held_out_rms(samples, tr, te, model) for tr, te in draws[name]])
+            f, m = np.median(errors, axis=0)
+            cells.append(f"{f:.3f} N / {m:.4f} N·m")
+        print(f"| {model} | {' | '.join(cells)} |")
+        sys.stdout.flush()
+
+
+def sim_table(seeds: int) -> None:
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from calibration.drift_data import NOISE_6
+    from calibration.sim_drift_data import PER_POSE, session
+
+    floor = NOISE_6[0] / np.sqrt(PER_POSE)
+    out: dict[tuple[int, str], list[float]] = {}
+    for seed in range(seeds):
+        _, samples, _ = session(seed, 30)
+        rng = np.random.default_rng(seed + 100)
+        for n in (9, 20):
+            order = rng.permutation(30)
+            for model in MODELS:
+                f, _ = held_out_rms(samples, order[:n], order[n:], model)
+                out.setdefault((n, model), []).append(f / floor)
+    print(f"held-out force error / pose-mean noise ({floor:.4f} N), median over {seeds} seeds")
+    for (n, model), v in out.items():
+        print(f"  {n:2d} poses  {model:10s}  {np.median(v):.2f}")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--real", type=Path, help="folder with the 100-pose recording")
+    parser.add_argument("--splits", type=int, default=30)
+    parser.add_argument("--sim", action="store_true")
+    parser.add_argument("--seeds", type=int, default=5)
+    args = parser.parse_args()
+    if args.real is not None:
+        real_table(read_real(args.real), args.splits)
+    if args.sim:
+        sim_table(args.seeds)
+
+
+if __name__ == "__main__":
+    main()
