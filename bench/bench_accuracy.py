@@ -12,7 +12,8 @@ github.com/leledeyuan00/Gravity-Compensation-F-T-sensor (folder ``datas/``, an A
 arm, 100 static poses in recording order, one reading each; docs/calibration.md). The files
 carry no times: pose k is given ``t = k`` seconds (the recording order is the clock).
 
-For each model (``none``, ``quadratic``, ``stochastic``), calibrate on a random subset of poses
+For each model (``none``, ``quadratic``, ``stochastic``, ``stochastic+map``: with the general
+linear sensor map, ``--sensor-map linear``), calibrate on a random subset of poses
 and predict the others at their times through :func:`ftcomp.calibration.identify_extended.
 calibrate_extended` and :class:`~ftcomp.compensation.compensator.GravityCompensator` (what
 ``ftcomp calibrate`` and ``ftcomp compensate`` run), RMS over the held-out poses, median over
@@ -39,7 +40,7 @@ from ftcomp.calibration.identify_extended import calibrate_extended
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.samples import Samples
 
-MODELS = ("none", "quadratic", "stochastic")
+MODELS = ("none", "quadratic", "stochastic", "stochastic+map")
 
 
 def read_real(folder: Path) -> Samples:
@@ -78,10 +79,13 @@ def _pick(samples: Samples, poses: np.ndarray) -> Samples:
 def held_out_rms(samples: Samples, train: np.ndarray, test: np.ndarray, model: str):
     """Force [N] and torque [N*m] RMS predicting ``test`` poses from ``train`` poses."""
     fit_on, held = _pick(samples, np.sort(train)), _pick(samples, np.sort(test))
+    drift, _, mapped = model.partition("+")
     if model == "none":
         result = calibrate(fit_on, leave_one_out=False)
     else:
-        result = calibrate_extended(fit_on, bias_drift=model, leave_one_out=False)
+        result = calibrate_extended(
+            fit_on, bias_drift=drift, sensor_map=mapped == "map", leave_one_out=False
+        )  # type: ignore[arg-type]
     ids, R, wrench, _, _ = pose_means(held)
     t = np.array([held.t[held.pose == i].mean() for i in ids])
     e = GravityCompensator(result).compensate(wrench, R, t_s=t)

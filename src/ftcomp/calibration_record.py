@@ -11,6 +11,8 @@ here adds what was measured about it:
 - :class:`BiasDrift`: the bias as a polynomial in time (``ftcomp calibrate --bias-drift linear``
   or ``quadratic``), or :class:`StochasticBiasDrift`: the bias as a Matérn 3/2 process in time,
   its smoothed estimate (``--bias-drift stochastic``), and
+- :class:`SensorMap`: a general linear map (gain, crosstalk, misalignment) on the tool's gravity
+  wrench, regularised toward the physical model (``ftcomp calibrate --sensor-map linear``), and
 - :class:`MountRotation`: the sensor frame in the frame the orientations were recorded in
   (``ftcomp calibrate --identify-mount``);
 - :class:`DynamicCalibration`: the tool's inertia tensor (``ftcomp calibrate-dynamic``).
@@ -33,6 +35,7 @@ from ftcomp.model import GravityModel
 
 __all__ = [
     "DRIFT_ORDERS",
+    "SENSOR_MAP_SUPPORT",
     "AnyBiasDrift",
     "BiasDrift",
     "Calibration",
@@ -41,6 +44,7 @@ __all__ = [
     "Method",
     "MountAxes",
     "MountRotation",
+    "SensorMap",
     "StandardErrors",
     "StochasticBiasDrift",
     "matern32_correlation",
@@ -326,6 +330,54 @@ class MountRotation:
         freeze_field(self, "std_errors_rad", (n,))
 
 
+#: Log Bayes factor above which the data are said to support the sensor map (about 20:1).
+SENSOR_MAP_SUPPORT: Final = 3.0
+
+
+@dataclass(frozen=True)
+class SensorMap:
+    """A general linear map on the tool's gravity wrench: ``reading = bias + (A(P) + delta) g_s``
+    with ``A(P) = [I; skew(P)]`` the physical model and ``g_s`` the tool's gravity in the sensor
+    frame (:mod:`ftcomp.calibration.sensor_map`).
+
+    Attributes:
+        delta: (6, 3): force rows dimensionless (gain, crosstalk, misalignment), torque rows [m].
+        std_errors: their standard errors, (6, 3).
+        log_evidence_gain: log marginal likelihood with the map minus without it (a log Bayes
+            factor; the map integrated out under its prior).
+        applied: whether the calibration uses it: only when the data support it (the model,
+            residuals and compensation are then the map's; otherwise the physical model's, and
+            the map is kept for the record).
+    """
+
+    delta: NDArray[np.float64]
+    std_errors: NDArray[np.float64]
+    log_evidence_gain: float
+    applied: bool = True
+
+    def __post_init__(self) -> None:
+        freeze_field(self, "delta", (6, 3), finite=True)
+        freeze_field(self, "std_errors", (6, 3))
+
+    @property
+    def supported(self) -> bool:
+        """Whether the data support the map: a log Bayes factor above ``SENSOR_MAP_SUPPORT``."""
+        return self.log_evidence_gain > SENSOR_MAP_SUPPORT
+
+    def verdict(self) -> str:
+        """One sentence on whether the data support the map."""
+        gain = self.log_evidence_gain
+        if self.supported:
+            return (
+                f"the data support the linear sensor map (log Bayes factor {gain:+.1f} over the "
+                "physical model)"
+            )
+        return (
+            f"the data do not support the linear sensor map (log Bayes factor {gain:+.1f}, "
+            f"needs > {SENSOR_MAP_SUPPORT:g}): the physical model is used"
+        )
+
+
 @dataclass(frozen=True)
 class Calibration:
     """The result of an identification: the model plus the evidence for it.
@@ -349,6 +401,8 @@ class Calibration:
             constant.
         mount: the sensor frame's rotation in the frame the orientations were recorded in
             (``--identify-mount``), or None: the orientations are the sensor's.
+        sensor_map: the general linear map (``--sensor-map linear``), or None: the physical
+            model's.
     """
 
     model: GravityModel
@@ -365,6 +419,7 @@ class Calibration:
     warnings: tuple[str, ...] = ()
     bias_drift: BiasDrift | StochasticBiasDrift | None = None
     mount: MountRotation | None = None
+    sensor_map: SensorMap | None = None
 
     def __post_init__(self) -> None:
         n = len(self.pose_ids)

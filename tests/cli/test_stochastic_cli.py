@@ -6,7 +6,6 @@ from __future__ import annotations
 import csv
 import json
 
-import numpy as np
 from scipy.spatial.transform import Rotation
 
 from calibration.sim_drift_data import session

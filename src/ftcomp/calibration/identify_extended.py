@@ -28,8 +28,15 @@ from ftcomp.calibration.identify import (
 )
 from ftcomp.calibration.methods import fit_paper, joint_sigma
 from ftcomp.calibration.mount import MIN_POSES, mount_from_fit, mount_warnings
-from ftcomp.calibration.stochastic import fit_stochastic, pose_times
-from ftcomp.calibration_record import DRIFT_ORDERS, Calibration, DriftModel, MountAxes
+from ftcomp.calibration.stochastic import StochasticFit, fit_stochastic, pose_times
+from ftcomp.calibration_record import (
+    DRIFT_ORDERS,
+    SENSOR_MAP_SUPPORT,
+    Calibration,
+    DriftModel,
+    MountAxes,
+    SensorMap,
+)
 from ftcomp.errors import IdentificationError
 from ftcomp.samples import Samples
 
@@ -44,8 +51,9 @@ def calibrate_extended(
     bias_drift: DriftModel = "none",
     identify_mount: MountAxes | None = None,
     leave_one_out: bool = True,
+    sensor_map: bool = False,
 ) -> Calibration:
-    """The joint method with a drifting bias and/or an unknown mount rotation.
+    """The joint method with a drifting bias and/or an unknown mount rotation or sensor map.
 
     Args:
         samples: readings at distinct poses; a drift model needs their times (``t``).
@@ -55,18 +63,27 @@ def calibrate_extended(
         identify_mount: None, ``"yaw"`` (about the recorded frame's z) or ``"full"``; the
             samples' orientations are then the recorded frame's (flange, TCP).
         leave_one_out: each pose predicted (at its time) by a refit to the others.
+        sensor_map: also fit a general linear sensor map (:mod:`.sensor_map`), regularised
+            toward the physical model, with a verdict on whether the data support it; with a
+            constant or stochastic bias, not with a mount.
 
     Raises:
         IdentificationError: no ``t`` for a drift model, too few poses for the parameters,
             (stochastic) times that go back.
     """
-    if bias_drift == "stochastic":
-        if identify_mount is not None:
+    if bias_drift == "stochastic" or sensor_map:
+        if identify_mount is not None or bias_drift in ("linear", "quadratic"):
             raise IdentificationError(
-                "--bias-drift stochastic does not combine with --identify-mount (identify the "
-                "mount first, with a constant or polynomial bias)"
+                "--bias-drift stochastic and --sensor-map combine with neither --identify-mount "
+                "nor a polynomial drift (identify the mount first, with a constant or "
+                "polynomial bias)"
             )
-        return _calibrate_stochastic(samples, leave_one_out=leave_one_out)
+        return _calibrate_stochastic(
+            samples,
+            leave_one_out=leave_one_out,
+            drift=bias_drift == "stochastic",
+            sensor_map=sensor_map,
+        )
     order = DRIFT_ORDERS.get(bias_drift)
     if order is None:
         raise IdentificationError(
@@ -124,18 +141,21 @@ def calibrate_extended(
     )
 
 
-def _calibrate_stochastic(samples: Samples, *, leave_one_out: bool) -> Calibration:
-    """The joint method with the bias a Matérn 3/2 process (:mod:`.stochastic`)."""
-    t_pose = pose_times(samples)
+def _calibrate_stochastic(
+    samples: Samples, *, leave_one_out: bool, drift: bool, sensor_map: bool
+) -> Calibration:
+    """The joint method with the bias a Matérn 3/2 process (:mod:`.stochastic`) and/or a
+    general linear sensor map (:mod:`.sensor_map`)."""
     base = calibrate(samples, method="joint", leave_one_out=False)
     _, R, wrench, count, var_mean = pose_means(samples)
+    t_pose = pose_times(samples) if drift else np.arange(len(R), dtype=float)
     repeated = bool(np.any(count > 1))
     sigma = (
         joint_sigma(wrench, R, var_mean, count, fit_paper(wrench, R))
         if repeated
         else np.zeros_like(wrench)  # one reading per pose: the white scatter carries the noise
     )
-    t_all = t_pose if samples.t is None else samples.t  # pose_times checked there is one
+    t_all = t_pose if samples.t is None or not drift else samples.t
     t_range = (float(t_all.min()), float(t_all.max()))
     theta0 = np.concatenate(
         [
@@ -145,9 +165,29 @@ def _calibrate_stochastic(samples: Samples, *, leave_one_out: bool) -> Calibrati
             base.model.center_of_gravity_m,
         ]
     )
-    fit, loo = fit_stochastic(
-        wrench, R, sigma, theta0, t_pose, t_range_s=t_range, source=samples.source
-    )
+
+    def run(with_map: bool) -> tuple[StochasticFit, NDArray[np.float64]]:
+        return fit_stochastic(
+            wrench,
+            R,
+            sigma,
+            theta0,
+            t_pose,
+            t_range_s=t_range,
+            source=samples.source,
+            drift=drift,
+            sensor_map=with_map,
+        )
+
+    fit, loo = run(False)
+    mapped = None
+    with_map, loo_map = run(True) if sensor_map else (fit, loo)
+    if with_map.sensor_map is not None:
+        delta, delta_se = with_map.sensor_map
+        gain = with_map.log_likelihood - fit.log_likelihood
+        mapped = SensorMap(delta, delta_se, gain, applied=gain > SENSOR_MAP_SUPPORT)
+        if mapped.applied:
+            fit, loo = with_map, loo_map
     theta = fit.theta.copy()
     theta[3:9] = fit.end_bias
     model = model_from_theta(theta)
@@ -157,7 +197,11 @@ def _calibrate_stochastic(samples: Samples, *, leave_one_out: bool) -> Calibrati
         force_bias_N=fit.drift.end_std[:3],
         torque_bias_Nm=fit.drift.end_std[3:],
     )
-    residuals = wrench - model.predict(R) - fit.drift.offset(t_pose)
+    predicted = model.predict(R) + (fit.drift.offset(t_pose) if drift else 0.0)
+    if mapped is not None and mapped.applied:
+        predicted = predicted + model.gravity_wrench(R)[:, :3] @ mapped.delta.T
+    residuals = wrench - predicted
+    warnings = [*base.warnings, *([mapped.verdict()] if mapped is not None else [])]
     return replace(
         base,
         model=model,
@@ -165,8 +209,10 @@ def _calibrate_stochastic(samples: Samples, *, leave_one_out: bool) -> Calibrati
         residuals=residuals,
         relative_error_percent=relative_error_percent(residuals, wrench),
         loo_error=loo if leave_one_out else np.full_like(wrench, np.nan),
-        bias_drift=fit.drift,
+        warnings=tuple(warnings),
+        bias_drift=fit.drift if drift else None,
         mount=None,
+        sensor_map=mapped,
     )
 
 

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.calibration.identify import pose_groups
-from ftcomp.calibration.methods import joint_jacobian, predict_wrench
+from ftcomp.calibration.sensor_map import map_jacobian, predict_mapped, prior_precision
 from ftcomp.calibration_record import StochasticBiasDrift, matern32_correlation
 from ftcomp.errors import IdentificationError
 from ftcomp.samples import Samples
@@ -87,7 +87,9 @@ class StochasticFit:
         covariance: their covariance (12, 12), the drift included.
         drift: the smoothed bias process (the model's bias is ``F0, M0 + g(t_max)``).
         end_bias: the bias at the end of the calibration ``F0, M0 + g(t_max)``, (6,).
-        log_likelihood: the restricted log marginal likelihood at the optimum.
+        log_likelihood: the restricted log marginal likelihood at the optimum (the map, when
+            fitted, integrated out under its prior: comparable between fits with and without).
+        sensor_map: the map ``delta`` (6, 3) and its standard errors (6, 3), or None.
     """
 
     theta: NDArray[np.float64]
@@ -95,6 +97,7 @@ class StochasticFit:
     drift: StochasticBiasDrift
     end_bias: NDArray[np.float64]
     log_likelihood: float
+    sensor_map: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
 
 class _Problem:
@@ -106,20 +109,31 @@ class _Problem:
         R: NDArray[np.float64],
         sigma: NDArray[np.float64],
         t: NDArray[np.float64],
+        n: int,
     ) -> None:
         self.wrench, self.R, self.sigma2, self.t = wrench, R, sigma**2, t
-        self.P = len(wrench)
+        self.P, self.n = len(wrench), n
         self.dt = t[:, None] - t[None, :]
-        self.theta = np.zeros(12)
+        self.theta = np.zeros(n)
         self.r = np.zeros((self.P, 6))
-        self.J = np.zeros((6, self.P, 12))
+        self.J = np.zeros((6, self.P, n))
+        self.prior = prior_precision(n)
+        mapped = self.prior > 0.0
+        self.prior_logdet = float(np.sum(np.log(self.prior[mapped])))
 
     def linearise(self, theta: NDArray[np.float64]) -> None:
-        """Residuals ``y - h(theta)`` (P, 6) and ``dh/dtheta`` per axis (6, P, 12)."""
+        """Residuals ``y - h(x)`` (P, 6) and ``dh/dx`` per axis (6, P, n)."""
         self.theta = theta
-        self.r = self.wrench - predict_wrench(theta, self.R)
-        J = joint_jacobian(theta, self.R, self.wrench, np.ones_like(self.wrench))
-        self.J = J.reshape(self.P, 6, 12).transpose(1, 0, 2).copy()
+        self.r = self.wrench - predict_mapped(theta, self.R)
+        self.J = map_jacobian(theta, self.R).transpose(1, 0, 2).copy()
+
+    def normal(
+        self, rw: NDArray[np.float64], Jw: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The Gauss-Newton system with the map's prior: ``(J^T V^-1 J + Lambda, J^T V^-1 r -
+        Lambda x)``."""
+        F = Jw.T @ Jw + np.diag(self.prior)
+        return F, Jw.T @ rw - self.prior * self.theta
 
     def factor(self, h: NDArray[np.float64]) -> NDArray[np.float64]:
         """Cholesky factors of ``V_j`` for hyperparameters ``h`` (log), (6, P, P)."""
@@ -131,17 +145,17 @@ class _Problem:
         return np.asarray(np.linalg.cholesky(V))
 
     def whiten(self, L: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """``L^-1 r`` stacked (6P,) and ``L^-1 J`` stacked (6P, 12)."""
+        """``L^-1 r`` stacked (6P,) and ``L^-1 J`` stacked (6P, n)."""
         from scipy.linalg import solve_triangular
 
         rw = np.empty((6, self.P))
-        Jw = np.empty((6, self.P, 12))
+        Jw = np.empty((6, self.P, self.n))
         for j in range(6):
             both = solve_triangular(
                 L[j], np.column_stack([self.r[:, j], self.J[j]]), lower=True, check_finite=False
             )
             rw[j], Jw[j] = both[:, 0], both[:, 1:]
-        return rw.reshape(-1), Jw.reshape(6 * self.P, 12)
+        return rw.reshape(-1), Jw.reshape(6 * self.P, self.n)
 
     def neg_log_likelihood(self, h: NDArray[np.float64]) -> float:
         """Minus the restricted log marginal likelihood (constants dropped)."""
@@ -150,14 +164,16 @@ class _Problem:
         except np.linalg.LinAlgError:
             return math.inf
         rw, Jw = self.whiten(L)
-        F = Jw.T @ Jw
+        F, b = self.normal(rw, Jw)
         sign, logdet_F = np.linalg.slogdet(F)
         if sign <= 0:
             return math.inf
-        delta = np.linalg.solve(F, Jw.T @ rw)
-        quad = float(rw @ rw - rw @ (Jw @ delta))
+        delta = np.linalg.solve(F, b)
+        x = self.theta + delta
+        e = rw - Jw @ delta
+        quad = float(e @ e + x @ (self.prior * x))
         logdet_V = 2.0 * float(np.sum(np.log(np.diagonal(L, axis1=1, axis2=2))))
-        return 0.5 * (logdet_V + logdet_F + quad)
+        return 0.5 * (logdet_V + logdet_F - self.prior_logdet + quad)
 
 
 def _unpack(h: NDArray[np.float64]) -> tuple[float, NDArray[np.float64], NDArray[np.float64]]:
@@ -175,8 +191,11 @@ def fit_stochastic(
     *,
     t_range_s: tuple[float, float] | None = None,
     source: str = "the poses",
+    drift: bool = True,
+    sensor_map: bool = False,
 ) -> tuple[StochasticFit, NDArray[np.float64]]:
-    """Fit per-pose means with a Matérn 3/2 bias process; hyperparameters by REML.
+    """Fit per-pose means with a Matérn 3/2 bias process and/or a general linear sensor map
+    (:mod:`.sensor_map`); hyperparameters by REML.
 
     Args:
         wrench: per-pose mean readings (P, 6) [N, N*m], sensor frame.
@@ -187,6 +206,8 @@ def fit_stochastic(
         t_pose_s: each pose's mean time [s] (P,), increasing.
         t_range_s: the calibration's time range [s] (default: the poses' times).
         source: where the poses came from, for messages.
+        drift: fit the bias process (False: a constant bias, the white scatter alone).
+        sensor_map: fit the map ``delta`` too, under its prior.
 
     Returns:
         The fit, and each pose's leave-one-pose-out error (P, 6) (hyperparameters held).
@@ -194,13 +215,14 @@ def fit_stochastic(
     from scipy.optimize import minimize  # imported here: it takes a second to load
 
     P = len(wrench)
-    if P < MIN_POSES:
+    if drift and P < MIN_POSES:
         raise IdentificationError(
             f"{source}: {P} poses; --bias-drift stochastic needs at least {MIN_POSES} (12 tool "
             "parameters and 9 hyperparameters of the drift from 6 numbers per pose)"
         )
-    problem = _Problem(wrench, R, sigma, t_pose_s)
-    problem.linearise(theta0)
+    n = 30 if sensor_map else 12
+    problem = _Problem(wrench, R, sigma, t_pose_s, n)
+    problem.linearise(np.concatenate([theta0[:12], np.zeros(n - 12)]))
     span = float(t_pose_s[-1] - t_pose_s[0])
     gap = float(np.min(np.diff(t_pose_s)))
     spread = np.maximum(np.std(problem.r, axis=0), 1e-9)
@@ -211,6 +233,9 @@ def fit_stochastic(
         + [(math.log(s * 1e-4), math.log(s * 10.0)) for s in spread]
         + [(math.log(f * 1e-5), math.log(f * 10.0)) for f in floor]
     )
+    if not drift:  # the process held at a negligible size: a constant bias
+        h[1:7] = np.log(spread * 1e-9)
+        bounds[:7] = [(v, v) for v in h[:7]]
     nll = math.inf
     for _ in range(_ROUNDS):
         result = minimize(problem.neg_log_likelihood, h, method="L-BFGS-B", bounds=bounds)
@@ -219,8 +244,8 @@ def fit_stochastic(
         L = problem.factor(h)
         theta = problem.theta
         for _ in range(_GAUSS_NEWTON):
-            rw, Jw = problem.whiten(L)
-            delta = np.linalg.lstsq(Jw, rw, rcond=None)[0]
+            F, b = problem.normal(*problem.whiten(L))
+            delta = np.linalg.lstsq(F, b, rcond=None)[0]
             theta = theta + delta
             problem.linearise(theta)
             if np.all(np.abs(delta) <= 1e-10 * np.maximum(np.abs(theta), 1.0)):
@@ -248,8 +273,10 @@ def _leave_one_out(problem: _Problem, h: NDArray[np.float64]) -> NDArray[np.floa
             cho_solve(factors[j], np.column_stack([problem.r[keep, j], problem.J[j][keep]]))
             for j in range(6)
         ]
-        F = sum(problem.J[j][keep].T @ solved[j][:, 1:] for j in range(6))
-        b = sum(problem.J[j][keep].T @ solved[j][:, 0] for j in range(6))
+        F = sum(problem.J[j][keep].T @ solved[j][:, 1:] for j in range(6)) + np.diag(problem.prior)
+        b = sum(problem.J[j][keep].T @ solved[j][:, 0] for j in range(6)) - (
+            problem.prior * problem.theta
+        )
         delta = np.linalg.lstsq(F, b, rcond=None)[0]
         for j in range(6):
             left = solved[j][:, 0] - solved[j][:, 1:] @ delta  # V^-1 (r - J delta), others
@@ -266,19 +293,20 @@ def _result(
 
     ell, scale, white = _unpack(h)
     L = problem.factor(h)
+    F, _ = problem.normal(*problem.whiten(L))
     _, Jw = problem.whiten(L)
-    cov = np.asarray(np.linalg.pinv(Jw.T @ Jw), dtype=np.float64)
+    cov = np.asarray(np.linalg.pinv(F), dtype=np.float64)
     P, t = problem.P, problem.t
     weights = np.column_stack([cho_solve((L[j], True), problem.r[:, j]) for j in range(6)])
     # Posterior standard error of the bias F0_j + g_j(t*) (universal kriging).
     t_eval = np.concatenate([t, [t_range[1]]])
     rho = matern32_correlation(t_eval[:, None] - t[None, :], ell)  # (P + 1, P)
     std = np.empty((P + 1, 6))
-    Jw3 = Jw.reshape(6, P, 12)
+    Jw3 = Jw.reshape(6, P, problem.n)
     for j in range(6):
         k = scale[j] ** 2 * rho  # (P + 1, P)
         w = solve_triangular(L[j], k.T, lower=True, check_finite=False)  # (P, P + 1)
-        u = -(Jw3[j].T @ w)  # (12, P + 1)
+        u = -(Jw3[j].T @ w)  # (n, P + 1)
         u[3 + j] += 1.0  # the selector of F0_j (or M0_j)
         var = scale[j] ** 2 - np.sum(w * w, axis=0) + np.einsum("ip,ij,jp->p", u, cov, u)
         std[:, j] = np.sqrt(np.maximum(var, 0.0))
@@ -295,4 +323,9 @@ def _result(
     )
     g_end = (scale**2 * weights * matern32_correlation(t_range[1] - t, ell)[:, None]).sum(axis=0)
     end_bias = problem.theta[3:9] + g_end
-    return StochasticFit(problem.theta.copy(), cov, drift, end_bias, -nll)
+    x = problem.theta
+    mapped = None
+    if problem.n > 12:
+        se = np.sqrt(np.maximum(np.diag(cov)[12:30], 0.0))
+        mapped = (x[12:30].reshape(6, 3).copy(), se.reshape(6, 3))
+    return StochasticFit(x[:12].copy(), cov[:12, :12], drift, end_bias, -nll, mapped)

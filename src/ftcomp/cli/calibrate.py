@@ -71,6 +71,15 @@ def register(parser: argparse.ArgumentParser) -> None:
         "in that frame too (yaw about its z axis, 4+ poses; or all three angles, 6+ poses; "
         "joint method; default: the orientations are the sensor's)",
     )
+    parser.add_argument(
+        "--sensor-map",
+        choices=("physical", "linear"),
+        default="physical",
+        help="linear: also fit a general linear map of the tool's gravity wrench (gain, "
+        "crosstalk, mount misalignment), regularised toward the physical model so that it does "
+        "little harm at few poses, and say whether the data support it (joint method, with a "
+        "constant or stochastic bias; default: physical, the paper's model)",
+    )
     add_range_argument(parser)
     parser.add_argument(
         "--still-segments",
@@ -113,14 +122,20 @@ def run(args: argparse.Namespace) -> int:
     print_warnings(samples.warnings)
     if args.still_segments:
         samples = _still_segments(samples, args)
-    extended = args.bias_drift != "none" or args.identify_mount is not None
+    mapped = args.sensor_map == "linear"
+    extended = args.bias_drift != "none" or args.identify_mount is not None or mapped
     if extended and args.method != "joint":
-        raise ParameterError("--bias-drift and --identify-mount need --method joint")
+        raise ParameterError(
+            "--bias-drift, --identify-mount and --sensor-map linear need --method joint"
+        )
     if extended:
         from ftcomp.calibration.identify_extended import calibrate_extended
 
         result = calibrate_extended(
-            samples, bias_drift=args.bias_drift, identify_mount=args.identify_mount
+            samples,
+            bias_drift=args.bias_drift,
+            identify_mount=args.identify_mount,
+            sensor_map=mapped,
         )
     else:
         result = calibrate(samples, method=args.method)
@@ -218,6 +233,16 @@ def _render_extensions(result: Calibration, console: Console) -> None:
                     )
                 ),
             )
+        console.print(table)
+    if result.sensor_map is not None:
+        table = Table(title="Linear sensor map delta (force rows: fraction; torque rows: mm)")
+        table.add_column("row")
+        for col in ("x", "y", "z"):
+            table.add_column(col, justify="right")
+        for j, name in enumerate(WRENCH_COLUMNS):
+            scale = 1.0 if j < 3 else 1000.0
+            cells = zip(result.sensor_map.delta[j], result.sensor_map.std_errors[j], strict=True)
+            table.add_row(name, *(_pm(v, e, scale, 4) for v, e in cells))
         console.print(table)
     if mount is not None:
         angles = ", ".join(

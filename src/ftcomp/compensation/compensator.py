@@ -21,21 +21,24 @@ __all__ = ["GravityCompensator"]
 class GravityCompensator:
     """Removes bias and tool gravity from F/T readings.
 
-        Args:
-            calibration: a :class:`~ftcomp.calibration_record.Calibration` (e.g. from
-                :func:`ftcomp.load_calibration`) or a bare :class:`~ftcomp.model.GravityModel`.
+    Args:
+        calibration: a :class:`~ftcomp.calibration_record.Calibration` (e.g. from
+            :func:`ftcomp.load_calibration`) or a bare :class:`~ftcomp.model.GravityModel`.
 
-        A calibration with a mount (``--identify-mount``) takes the orientations of the frame it
-        was recorded in (flange, TCP) and turns them into the sensor's at no extra cost (folded into
-        the constant matrices). One with a bias drift applies it when given each sample's time
-        (``t_s``, on the recording's clock): a polynomial or the smoothed stochastic bias inside the
-    calibration's time range, the bias at its nearer end outside it (never extrapolated); without
-    times the bias is the model's, the bias at the end of the calibration.
+    A calibration with a mount (``--identify-mount``) takes the orientations of the frame it
+    was recorded in (flange, TCP) and turns them into the sensor's at no extra cost (folded
+    into the constant matrices, as is a general linear sensor map, ``--sensor-map``). One
+    with a bias drift applies it when given each sample's time (``t_s``, on the recording's
+    clock): a polynomial or the smoothed stochastic bias inside the calibration's time
+    range, the bias at its nearer end outside it (never extrapolated); without times the
+    bias is the model's, the bias at the end of the calibration.
     """
 
     def __init__(self, calibration: Calibration | GravityModel) -> None:
+        sensor_map = None
         if isinstance(calibration, Calibration):
             model, mount, drift = calibration.model, calibration.mount, calibration.bias_drift
+            sensor_map = calibration.sensor_map
         else:
             model, mount, drift = calibration, None, None
         self.model = model
@@ -48,6 +51,8 @@ class GravityCompensator:
         # [F; M] of the tool gravity = A @ g_s with A = [I; skew(P)] (Eq. 12, 20); with a mount,
         # g_s = R_rec_sensor.T @ g_rec, so A @ R_rec_sensor.T acts on the recorded frame's.
         self._A = np.vstack([np.eye(3), skew(model.center_of_gravity_m)])
+        if sensor_map is not None and sensor_map.applied:  # folded in as the mount is
+            self._A = self._A + sensor_map.delta
         if self.mount is not None:
             self._A = self._A @ self.mount.R_rec_sensor.T
         # For a batch, fold R.T @ g and A into one (9, 6) matrix acting on R flattened row-major:

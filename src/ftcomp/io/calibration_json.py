@@ -11,7 +11,9 @@ where the reading is zero) are ``null``. Optional, when identified: ``bias_drift
 nearer end, never extrapolated), then for ``linear``/``quadratic`` the coefficients per power of
 seconds with standard errors, for ``stochastic`` the Matérn 3/2 process: ``time_constant_s``,
 ``scale`` [6], ``white_noise`` [6], ``knots_t_s`` [P], ``weights`` [P][6], ``knot_std`` [P][6],
-``end_std`` [6]) and
+``end_std`` [6]), ``sensor_map`` (``delta`` [6][3]: force rows dimensionless, torque rows in
+metres; ``std_errors``; ``log_evidence_gain``; ``supported``; ``applied``: compensation folds
+``delta`` in only when true) and
 ``mount`` (``axes``, ``angles_deg``, ``std_errors_deg``); files without them load as before.
 """
 
@@ -32,6 +34,7 @@ from ftcomp.calibration_record import (
     BiasDrift,
     Calibration,
     MountRotation,
+    SensorMap,
     StandardErrors,
     StochasticBiasDrift,
     mount_matrix,
@@ -127,7 +130,38 @@ def calibration_to_dict(calibration: Calibration) -> dict[str, Any]:
             {"bias_drift": _drift_to_dict(calibration.bias_drift)} if calibration.bias_drift else {}
         ),
         **({"mount": _mount_to_dict(calibration.mount)} if calibration.mount else {}),
+        **({"sensor_map": _map_to_dict(calibration.sensor_map)} if calibration.sensor_map else {}),
     }
+
+
+def _map_to_dict(sensor_map: SensorMap) -> dict[str, object]:
+    return {
+        "model": "linear",
+        "delta": sensor_map.delta.tolist(),
+        "std_errors": _json_array(sensor_map.std_errors),
+        "log_evidence_gain": sensor_map.log_evidence_gain,
+        "supported": sensor_map.supported,
+        "applied": sensor_map.applied,
+    }
+
+
+def _sensor_map(data: Any, source: str) -> SensorMap | None:
+    """The optional ``sensor_map`` entry (absent or null: the physical model)."""
+    if data is None:
+        return None
+    delta = _optional_array(data.get("delta") if isinstance(data, dict) else None, (6, 3))
+    gain = data.get("log_evidence_gain") if isinstance(data, dict) else None
+    if not np.all(np.isfinite(delta)) or not isinstance(gain, (int, float)):
+        raise CalibrationFileError(
+            f"{source}: 'sensor_map' needs delta [6][3] finite and log_evidence_gain"
+        )
+    applied = data.get("applied", True)
+    return SensorMap(
+        delta,
+        _optional_array(data.get("std_errors"), (6, 3)),
+        float(gain),
+        applied=applied is True,
+    )
 
 
 def _drift_to_dict(drift: BiasDrift | StochasticBiasDrift) -> dict[str, object]:
@@ -394,6 +428,7 @@ def load_calibration(path: str | os.PathLike[str]) -> Calibration:
         warnings=tuple(w for w in _list(data.get("warnings")) if isinstance(w, str)),
         bias_drift=_drift(data.get("bias_drift"), source),
         mount=_mount(data.get("mount"), source),
+        sensor_map=_sensor_map(data.get("sensor_map"), source),
     )
 
 
