@@ -59,3 +59,18 @@ def test_bad_input_for_a_stochastic_drift_is_one_line_and_exit_2(tmp_path, capsy
     assert main(["calibrate", str(path), "--bias-drift", "stochastic"]) == 2
     err = capsys.readouterr().err.strip()
     assert "needs at least 6" in err and "\n" not in err
+
+
+def test_calibrate_sensor_map_reports_its_verdict_and_writes_it(tmp_path, capsys) -> None:
+    _, samples, _ = session(34, 8)
+    path, cal = tmp_path / "s.csv", tmp_path / "cal.json"
+    write_csv(path, samples)
+    argv = ["calibrate", str(path), "--bias-drift", "stochastic", "--sensor-map", "linear"]
+    assert main([*argv, "-o", str(cal)]) == 0
+    captured = capsys.readouterr()
+    assert "Linear sensor map" in captured.out
+    assert "linear sensor map" in captured.err  # the verdict, supported or not
+    data = json.loads(cal.read_text())["sensor_map"]
+    assert isinstance(data["supported"], bool) and len(data["delta"]) == 6
+    assert main([*argv, "--method", "paper"]) == 2
+    assert "need --method joint" in capsys.readouterr().err
