@@ -40,6 +40,9 @@ from ftcomp.calibration.identify_extended import calibrate_extended
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.samples import Samples
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from calibration.sim_drift_data import subset
+
 MODELS = ("none", "quadratic", "stochastic", "stochastic+map")
 
 
@@ -62,23 +65,13 @@ def read_real(folder: Path) -> Samples:
     )
 
 
-def _pick(samples: Samples, poses: np.ndarray) -> Samples:
-    from dataclasses import replace
-
-    assert samples.pose is not None and samples.t is not None
-    chosen = np.isin(samples.pose, np.array([f"p{k}" for k in poses]))
-    return replace(
-        samples,
-        wrench_sensor=samples.wrench_sensor[chosen],
-        R_base_sensor=samples.R_base_sensor[chosen],
-        pose=samples.pose[chosen],
-        t=samples.t[chosen],
-    )
-
-
 def held_out_rms(samples: Samples, train: np.ndarray, test: np.ndarray, model: str):
     """Force [N] and torque [N*m] RMS predicting ``test`` poses from ``train`` poses."""
-    fit_on, held = _pick(samples, np.sort(train)), _pick(samples, np.sort(test))
+    P = len(np.unique(samples.pose))
+    fit_on, held = (
+        subset(samples, np.isin(np.arange(P), train)),
+        subset(samples, np.isin(np.arange(P), test)),
+    )
     drift, _, mapped = model.partition("+")
     if model == "none":
         result = calibrate(fit_on, leave_one_out=False)
@@ -114,7 +107,6 @@ def real_table(samples: Samples, splits: int) -> None:
 
 
 def sim_table(seeds: int) -> None:
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
     from calibration.drift_data import NOISE_6
     from calibration.sim_drift_data import PER_POSE, session
 

@@ -36,8 +36,10 @@ from ftcomp.calibration_record import (
     DriftModel,
     MountAxes,
     SensorMap,
+    StandardErrors,
 )
 from ftcomp.errors import IdentificationError
+from ftcomp.model import GravityModel
 from ftcomp.samples import Samples
 
 __all__ = ["calibrate_extended"]
@@ -129,6 +131,23 @@ def calibrate_extended(
     if mount is not None:
         warnings += mount_warnings(mount)
     return replace(
+        _refitted(base, model, std_errors, wrench, residuals, loo, warnings),
+        bias_drift=drift,
+        mount=mount,
+    )
+
+
+def _refitted(
+    base: Calibration,
+    model: GravityModel,
+    std_errors: StandardErrors,
+    wrench: NDArray[np.float64],
+    residuals: NDArray[np.float64],
+    loo: NDArray[np.float64],
+    warnings: list[str],
+) -> Calibration:
+    """``base`` with an extended fit's model, errors, residuals and warnings."""
+    return replace(
         base,
         model=model,
         std_errors=std_errors,
@@ -136,8 +155,6 @@ def calibrate_extended(
         relative_error_percent=relative_error_percent(residuals, wrench),
         loo_error=loo,
         warnings=tuple(warnings),
-        bias_drift=drift,
-        mount=mount,
     )
 
 
@@ -202,14 +219,10 @@ def _calibrate_stochastic(
         predicted = predicted + model.gravity_wrench(R)[:, :3] @ mapped.delta.T
     residuals = wrench - predicted
     warnings = [*base.warnings, *([mapped.verdict()] if mapped is not None else [])]
+    if not leave_one_out:
+        loo = np.full_like(wrench, np.nan)
     return replace(
-        base,
-        model=model,
-        std_errors=std_errors,
-        residuals=residuals,
-        relative_error_percent=relative_error_percent(residuals, wrench),
-        loo_error=loo if leave_one_out else np.full_like(wrench, np.nan),
-        warnings=tuple(warnings),
+        _refitted(base, model, std_errors, wrench, residuals, loo, warnings),
         bias_drift=fit.drift if drift else None,
         mount=None,
         sensor_map=mapped,
