@@ -212,7 +212,11 @@ def save_timing(
     import json
 
     path = timing_path(log_path)
-    document = {"format": "ftcomp.timing/1", "log": log_path.name, "line": timing.line()}
+    document: dict[str, object] = {
+        "format": "ftcomp.timing/1",
+        "log": log_path.name,
+        "line": timing.line(),
+    }
     document.update(timing.as_dict())
     if log is not None:
         document["observer_dropped_rows"] = log.dropped_rows
