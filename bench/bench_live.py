@@ -35,6 +35,7 @@ import os
 import select
 import subprocess
 import sys
+import tarfile
 import tempfile
 import time
 from pathlib import Path
@@ -48,18 +49,13 @@ RPY_DEG = "180,0,180"
 
 
 def _export(rev: str, into: Path) -> str:
-    """``git archive REV src | tar -x -C into``; returns the short hash."""
-    short = subprocess.run(
-        ["git", "-C", str(REPO), "rev-parse", "--short", rev],
-        check=True,
-        capture_output=True,
-        text=True,
-    ).stdout.strip()
-    archive = subprocess.run(
-        ["git", "-C", str(REPO), "archive", rev, "src"], check=True, capture_output=True
-    ).stdout
-    subprocess.run(["tar", "-x", "-C", str(into)], input=archive, check=True)
-    return short
+    """That commit's ``src`` under ``into`` (``git archive``); returns its short hash."""
+    archive = into / "src.tar"
+    subprocess.run(["git", "-C", str(REPO), "archive", "-o", str(archive), rev, "src"], check=True)
+    with tarfile.open(archive) as tar:
+        tar.extractall(into, filter="data")
+    git = ["git", "-C", str(REPO), "rev-parse", "--short", rev]
+    return subprocess.run(git, check=True, capture_output=True, text=True).stdout.strip()
 
 
 def _calibration(folder: Path) -> Path:

@@ -36,7 +36,7 @@ def test_a_late_cycle_is_counted_logged_with_its_lateness_and_restarts_the_sched
     assert s.worst_gap_s == pytest.approx(0.007)
     assert s.compute_p50_s == pytest.approx(0.000301) and s.compute_max_s == pytest.approx(3e-4)
     assert s.age_p99_s == pytest.approx(0.001001)
-    assert "test loop: cycle 50 started 5.0 ms late (2 periods missed)" in caplog.text
+    assert "test loop: cycle 50 started 5.0 ms late (periods missed: 2)" in caplog.text
     assert "2 missed periods (1.96%)" in s.line() and "worst stretch 1 late in a row" in s.line()
 
 

@@ -16,15 +16,9 @@ STALE_NS = 20_000_000
 def _limits() -> SafetyLimits:
     """``ftcomp run``'s watchdog: no count of repeated stamps, the stale limit decides."""
     return SafetyLimits(
-        max_twist=np.array([0.02] * 3 + [0.5] * 3),
-        max_twist_rate=np.array([0.5] * 3 + [5.0] * 3),
-        max_travel=np.array([0.02] * 3 + [0.1] * 3),
-        max_force_N=40.0,
-        max_torque_Nm=8.0,
-        stale_after_s=STALE_NS * 1e-9,
-        max_repeated_samples=None,
+        0.05, 1.0, 0.1, 40.0, 8.0, STALE_NS * 1e-9, max_repeated_samples=None,
         max_identical_samples=5,
-    )
+    )  # fmt: skip
 
 
 def _run(arrivals_ns: np.ndarray, cycles: int) -> list[StopReason | None]:

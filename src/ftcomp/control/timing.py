@@ -206,7 +206,7 @@ class LoopTiming:
             if self.late_in_a_row > self.worst_late_in_a_row:
                 self.worst_late_in_a_row = self.late_in_a_row
             _log.warning(
-                "%s: cycle %d started %.1f ms late (%d periods missed)",
+                "%s: cycle %d started %.1f ms late (periods missed: %d)",
                 self.name,
                 self.cycles,
                 late * 1e-6,

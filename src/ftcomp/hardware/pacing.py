@@ -152,23 +152,35 @@ def on_host_clock(robot: Robot) -> bool:
     return getattr(robot, "clock_name", None) == HOST_CLOCK
 
 
+def _comm(path: str) -> str:
+    try:
+        with open(path, encoding="utf-8") as handle:
+            return handle.read().strip()
+    except OSError:
+        return ""
+
+
 def _native_threads() -> list[int]:
-    """The ids of this process's threads not started by :mod:`threading` (a device client's
-    native readers: ur_rtde's, pynetft's), without the calling one."""
+    """The ids of this process's threads not started by :mod:`threading` and left unnamed (a
+    device client's native readers, ur_rtde's and pynetft's, carry the process's name), without
+    the calling one; a named native thread (a view server's ``tokio-rt-worker``) is left as it
+    is."""
     try:
         tids = {int(t) for t in os.listdir("/proc/self/task")}
     except OSError:
         return []
     python = {t.native_id for t in threading.enumerate()}
-    return sorted(tids - python)
+    name = _comm("/proc/self/comm")
+    return sorted(t for t in tids - python if _comm(f"/proc/self/task/{t}/comm") == name)
 
 
 @contextlib.contextmanager
 def realtime_loop(priority: int = LOOP_PRIORITY, *, realtime: bool = True) -> Iterator[bool]:
     """While the block runs: the switch interval at :data:`LOOP_SWITCH_INTERVAL_S` and, with
-    ``realtime``, SCHED_FIFO at ``priority`` for the calling thread and the process's native
-    threads (module docstring); both undone on exit. Yields whether real-time scheduling was
-    granted (a refusal is logged once per process, with how to allow it).
+    ``realtime``, SCHED_FIFO at ``priority`` for the calling thread and the device clients'
+    native threads (module docstring; Python threads beside the loop, such as the observers'
+    worker, keep their normal priority); both undone on exit. Yields whether real-time
+    scheduling was granted (a refusal is logged once per process, with how to allow it).
     """
     global _said_refused
     switch = sys.getswitchinterval()

@@ -203,12 +203,10 @@ def timing_path(log_path: Path) -> Path:
     return log_path.with_name(log_path.stem + ".timing.json")
 
 
-def save_timing(
-    log_path: Path, timing: TimingSummary, *, log: CsvLog | None = None, t_ns: int = 0
-) -> Path:
-    """Write a session's timing block (:meth:`TimingSummary.as_dict` and its one line) beside
-    its log (:func:`timing_path`, atomically), and tell the log's observers as a ``timing``
-    event at ``t_ns`` [ns] (an MCAP log keeps it); return the block's path."""
+def save_timing(log_path: Path, timing: TimingSummary, *, log: CsvLog | None = None) -> Path:
+    """Write a session's timing block (:meth:`TimingSummary.as_dict`, its one line, and with
+    ``log`` the rows its observers dropped) beside its log (:func:`timing_path`, atomically);
+    return the block's path."""
     import json
 
     path = timing_path(log_path)
@@ -220,7 +218,6 @@ def save_timing(
     document.update(timing.as_dict())
     if log is not None:
         document["observer_dropped_rows"] = log.dropped_rows
-        log.event(t_ns, "timing", timing.line())
     atomic_write_text(path, json.dumps(document, indent=2, allow_nan=False, default=str) + "\n")
     return path
 

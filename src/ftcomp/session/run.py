@@ -397,7 +397,7 @@ def run_compliant(
         if observers:
             _tell_end(log, t0_ns[0] if t0_ns else 0, summary.t_ns, load, outcome, message)
         loop_timing = timing.summary()
-        save_timing(log_path, loop_timing, log=log, t_ns=summary.t_ns)
+        save_timing(log_path, loop_timing, log=log)
         dropped = log.dropped_rows
     duration_s, travel_m, final_error = summary.figures()
     return RunResult(

@@ -335,7 +335,7 @@ def stream(
         end_ns = t0_ns + round(logger.elapsed_s * 1e9)
         log.event(end_ns, "fault" if message else "end", message or outcome)
         loop_timing = timing.summary()
-        save_timing(log_path, loop_timing, log=log, t_ns=end_ns)
+        save_timing(log_path, loop_timing, log=log)
         dropped = log.dropped_rows
     health = sensor.stream_health() if isinstance(sensor, ReportsStreamHealth) else None
     return StreamResult(

@@ -23,6 +23,7 @@ import collections
 import contextlib
 import csv
 import dataclasses
+import gc
 import ipaddress
 import math
 import signal
@@ -361,6 +362,10 @@ class _Twin:
         realtime = self.config.realtime and realtime_priority(RT_PRIORITY + 2)
         timing = LoopTiming(_CYCLE_S, name="ftcomp twin")
         timing.realtime = realtime
+        # The cell's set-up (MuJoCo, numpy, scipy) is frozen out of the collector: a full
+        # collection over it took 30-40 ms, a stall that starved the Net F/T stream.
+        gc.collect()
+        gc.freeze()
         start = time.monotonic()
         due = start
         rng = np.random.default_rng(self.config.seed + 7)
