@@ -150,6 +150,16 @@ class LoopStats:
     timing: TimingSummary
 
 
+def _collect_in_slack() -> None:
+    """The collection the interpreter would have started by itself (its thresholds), run after
+    the cycle's command has been sent instead of in the middle of a cycle."""
+    young, middle, old = gc.get_count()
+    threshold0, threshold1, threshold2 = gc.get_threshold()
+    if young < threshold0:
+        return
+    gc.collect(2 if old >= threshold2 else 1 if middle >= threshold1 else 0)
+
+
 def run_loop(
     cycle: ControlCycle,
     step: Step,
@@ -170,7 +180,8 @@ def run_loop(
     exists before the loop is collected once and frozen (:func:`gc.freeze`), so the collections
     the loop's own garbage triggers scan only that (a few objects, microseconds) instead of
     every object of the process (tens of milliseconds with numpy, scipy and a client library
-    loaded); the freeze is undone on exit. A loop on the host's clock runs in
+    loaded), and they run between cycles, after the command has been sent (automatic collection
+    is off while the loop runs); both are undone on exit. A loop on the host's clock runs in
     :func:`~ftcomp.hardware.pacing.realtime_loop` (real-time scheduling where the OS allows it).
     """
     if timing is None:
@@ -179,6 +190,8 @@ def run_loop(
     n = 0
     gc.collect()
     gc.freeze()
+    automatic = gc.isenabled()
+    gc.disable()  # collected in the slack instead (_collect_in_slack)
     try:
         with realtime_loop(realtime=timing.paced) as timing.realtime:
             while max_cycles is None or n < max_cycles:
@@ -191,10 +204,13 @@ def run_loop(
                     sink(reading, twist)
                 cycle.command(twist, reading)
                 timing.sent(robot.now_ns() - reading.t_sample_ns)
+                _collect_in_slack()
                 cycle.advance()
                 n += 1
     finally:
         robot.stop()
+        if automatic:
+            gc.enable()
         gc.unfreeze()
     limiter = cycle.rate_limiter
     return LoopStats(

@@ -13,9 +13,10 @@ asks for its own loops) for the loop's thread and the device clients' native rea
 that a busy machine's ordinary processes cannot hold them off the CPU, and a short interpreter
 switch interval, so that a Python thread beside the loop (the observers' worker) hands the
 interpreter's lock back within a fraction of a period (the default, 5 ms, is 2.5 periods at
-500 Hz). Where the OS refuses real-time scheduling (no CAP_SYS_NICE, an ``rtprio`` limit of 0,
-a container without it) it says so once, with how to allow it, and the loop runs at normal
-priority.
+500 Hz), and a timer slack of 1 ns, so that the limiter's sleep ends on time (an ordinary
+thread's default slack, 50 us, doubles its median wake-up delay). Where the OS refuses
+real-time scheduling (no CAP_SYS_NICE, an ``rtprio`` limit of 0, a container without it) it says
+so once, with how to allow it, and the loop runs at normal priority.
 """
 
 from __future__ import annotations
@@ -152,6 +153,20 @@ def on_host_clock(robot: Robot) -> bool:
     return getattr(robot, "clock_name", None) == HOST_CLOCK
 
 
+_PR_SET_TIMERSLACK = 29
+
+
+def _timer_slack(ns: int) -> None:
+    """Set the calling thread's timer slack [ns] (Linux; 0: back to the default, 50 us, by
+    which an ordinary thread's sleep may overrun to let the kernel batch wake-ups)."""
+    if not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None).prctl(_PR_SET_TIMERSLACK, ctypes.c_ulong(ns), 0, 0, 0)
+
+
 def _comm(path: str) -> str:
     try:
         with open(path, encoding="utf-8") as handle:
@@ -185,6 +200,7 @@ def realtime_loop(priority: int = LOOP_PRIORITY, *, realtime: bool = True) -> It
     global _said_refused
     switch = sys.getswitchinterval()
     sys.setswitchinterval(min(switch, LOOP_SWITCH_INTERVAL_S))
+    _timer_slack(1)  # the loop's sleeps end on time (a real-time thread has no slack anyway)
     granted: list[int] = []
     if realtime and hasattr(os, "sched_setscheduler"):
         param = os.sched_param(priority)
@@ -209,6 +225,7 @@ def realtime_loop(priority: int = LOOP_PRIORITY, *, realtime: bool = True) -> It
         yield bool(granted)
     finally:
         sys.setswitchinterval(switch)
+        _timer_slack(0)
         normal = os.sched_param(0) if granted else None
         for tid in granted:
             with contextlib.suppress(OSError):
