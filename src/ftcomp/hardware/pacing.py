@@ -37,6 +37,7 @@ _log = logging.getLogger(__name__)
 __all__ = [
     "LOOP_PRIORITY",
     "LOOP_SWITCH_INTERVAL_S",
+    "WORKER_PRIORITY",
     "LatenessOfPacer",
     "RateLimiter",
     "on_host_clock",
@@ -47,6 +48,10 @@ __all__ = [
 #: kernel's own real-time threads and below ``ftcomp twin``'s cell, which stands for hardware
 #: outside the machine).
 LOOP_PRIORITY = 5
+
+#: The SCHED_FIFO priority of the other Python threads while a live loop runs (below the loop
+#: and the readers, above every ordinary process: see :func:`realtime_loop`).
+WORKER_PRIORITY = 1
 
 #: The interpreter's switch interval while a live loop runs [s] (Python's default: 5 ms).
 LOOP_SWITCH_INTERVAL_S = 2e-4
@@ -193,9 +198,12 @@ def _native_threads() -> list[int]:
 def realtime_loop(priority: int = LOOP_PRIORITY, *, realtime: bool = True) -> Iterator[bool]:
     """While the block runs: the switch interval at :data:`LOOP_SWITCH_INTERVAL_S` and, with
     ``realtime``, SCHED_FIFO at ``priority`` for the calling thread and the device clients'
-    native threads (module docstring; Python threads beside the loop, such as the observers'
-    worker, keep their normal priority); both undone on exit. Yields whether real-time
-    scheduling was granted (a refusal is logged once per process, with how to allow it).
+    native threads (module docstring), and at :data:`WORKER_PRIORITY` for the other Python
+    threads (the observers' worker): each holds the interpreter's lock in turn, and one that an
+    ordinary process preempts while it holds the lock would stall the loop and the readers
+    behind it (seen: a view's worker under a busy loop on each core aged the Net F/T's data
+    past the stale limit). All undone on exit. Yields whether real-time scheduling was
+    granted (a refusal is logged once per process, with how to allow it).
     """
     global _said_refused
     switch = sys.getswitchinterval()
@@ -216,11 +224,15 @@ def realtime_loop(priority: int = LOOP_PRIORITY, *, realtime: bool = True) -> It
                     )
                 )
         if granted:
-            for tid in _native_threads():
-                with contextlib.suppress(OSError):  # a thread that just ended
-                    if os.sched_getscheduler(tid) == os.SCHED_OTHER:  # not a client's own
-                        os.sched_setscheduler(tid, os.SCHED_FIFO, param)
-                        granted.append(tid)
+            worker = os.sched_param(WORKER_PRIORITY)
+            me = threading.get_native_id()
+            python = [t.native_id for t in threading.enumerate() if t.native_id != me]
+            for tids, chosen in ((_native_threads(), param), (python, worker)):
+                for tid in tids:
+                    with contextlib.suppress(OSError):  # a thread that just ended
+                        if tid and os.sched_getscheduler(tid) == os.SCHED_OTHER:  # not its own
+                            os.sched_setscheduler(tid, os.SCHED_FIFO, chosen)
+                            granted.append(tid)
     try:
         yield bool(granted)
     finally:
