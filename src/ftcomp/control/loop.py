@@ -176,22 +176,28 @@ def run_loop(
 
     Every cycle is timed (``timing``, or a :class:`~ftcomp.control.timing.LoopTiming` of the
     robot's period, paced when the robot is on the host's clock): pass one to keep its figures
-    when the loop ends by an exception. The garbage collector is kept out of the cycles: what
+    when the loop ends by an exception.
+
+    A paced loop (on the host's clock) keeps the garbage collector out of its cycles: what
     exists before the loop is collected once and frozen (:func:`gc.freeze`), so the collections
-    the loop's own garbage triggers scan only that (a few objects, microseconds) instead of
-    every object of the process (tens of milliseconds with numpy, scipy and a client library
-    loaded), and they run between cycles, after the command has been sent (automatic collection
-    is off while the loop runs); both are undone on exit. A loop on the host's clock runs in
+    the loop's own garbage triggers scan only that (a few objects) instead of every object of
+    the process (tens of milliseconds with numpy, scipy and a client library loaded), and they
+    run between cycles, after the command has been sent (automatic collection is off while the
+    loop runs); both are undone on exit. It also runs in
     :func:`~ftcomp.hardware.pacing.realtime_loop` (real-time scheduling where the OS allows it).
     """
     if timing is None:
         timing = LoopTiming(cycle.period_s, paced=on_host_clock(cycle.robot))
     robot = cycle.robot
     n = 0
-    gc.collect()
-    gc.freeze()
+    # A loop on the wall clock keeps the collector out of its cycles (a simulated one needs not).
+    paced = timing.paced
     automatic = gc.isenabled()
-    gc.disable()  # collected in the slack instead (_collect_in_slack)
+    frozen_before = gc.get_freeze_count()
+    if paced:
+        gc.collect()
+        gc.freeze()
+        gc.disable()  # collected in the slack instead (_collect_in_slack)
     try:
         with realtime_loop(realtime=timing.paced) as timing.realtime:
             while max_cycles is None or n < max_cycles:
@@ -204,14 +210,17 @@ def run_loop(
                     sink(reading, twist)
                 cycle.command(twist, reading)
                 timing.sent(robot.now_ns() - reading.t_sample_ns)
-                _collect_in_slack()
+                if paced:
+                    _collect_in_slack()
                 cycle.advance()
                 n += 1
     finally:
         robot.stop()
-        if automatic:
-            gc.enable()
-        gc.unfreeze()
+        if paced:
+            if automatic:
+                gc.enable()
+            if not frozen_before:  # a caller's own freeze stays
+                gc.unfreeze()
     limiter = cycle.rate_limiter
     return LoopStats(
         n,
