@@ -26,9 +26,8 @@ import numpy as np
 
 ROBOT, SENSOR = "127.0.0.41", "127.0.0.42"
 PERIOD_S = 0.002
-#: The client with a 0.2 ms switch interval (see docs/twin.md, known gaps): with Python's 5 ms,
-#: pynetft's reader thread starves on a loaded host and the run stops early.
-CLIENT = "import sys; sys.setswitchinterval(2e-4); from ftcomp.cli import main; sys.exit(main())"
+#: The client as a user runs it (its live loop sets what it needs: ftcomp.hardware.pacing).
+CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"
 
 
 def _rtde_timestamps(host: str, seconds: float) -> np.ndarray:

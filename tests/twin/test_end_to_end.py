@@ -25,11 +25,9 @@ LOAD_WEIGHT_N = 0.5 * 9.81
 KEYS = ("tool_weight_N", "center_of_gravity_m", "force_bias_N", "torque_bias_Nm")
 
 
-#: ``ftcomp`` in a process whose interpreter hands the lock over every 0.2 ms instead of 5 ms.
-#: With the default, on a loaded host the loop's catch-up cycles keep pynetft's reader thread
-#: from its packets for 3 cycles and ``run`` stops with ``repeated_sample`` (seen here in about
-#: half the runs; 3 of 3 settled with this): a fix for the client, not the twin.
-CLIENT = "import sys; sys.setswitchinterval(2e-4); from ftcomp.cli import main; sys.exit(main())"
+#: ``ftcomp`` as a user runs it: the live loop sets the interpreter's switch interval and asks
+#: for real-time priority itself (``ftcomp.hardware.pacing.realtime_loop``).
+CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"
 
 
 def _ftcomp(*args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess[str]:

@@ -213,6 +213,8 @@ def run(args: argparse.Namespace) -> int:
         finally:
             progress.close()
     summary = f"{result.output}: {result.poses_recorded} poses ({result.readings} readings)"
+    if result.timing is not None:
+        print(result.timing.line())
     if result.ended == "complete":
         print(f"wrote {summary}")
         return 0

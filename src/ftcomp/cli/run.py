@@ -85,6 +85,14 @@ def register(parser: argparse.ArgumentParser) -> None:
     p("--max-force-N", type=float, default=40.0, help="protective stop above [N] (40)")
     p("--max-torque-Nm", type=float, default=8.0, help="protective stop above [N*m] (8)")
     p("--stale-ms", type=float, default=20.0, help="a reading older than this stops [ms] (20)")
+    p(
+        "--max-identical-samples",
+        type=int,
+        default=5,
+        metavar="N",
+        help="new readings identical to the last that stop as a frozen sensor, beyond N "
+        "(default 5; 0: no check, for a noiseless simulation); docs/control.md",
+    )
     p("--max-late-cycles", type=int, default=10, help="missed periods in a row that stop (10)")
     p("--seconds", type=float, default=30.0, help="longest run [s] (30)")
     p(
@@ -123,6 +131,10 @@ def _check(args: argparse.Namespace) -> None:
         value = getattr(args, name)
         if not (math.isfinite(value) and value > 0.0):
             raise ParameterError(f"--{name.replace('_', '-')} must be > 0, got {value:g}")
+    if args.max_identical_samples < 0:
+        raise ParameterError(
+            f"--max-identical-samples must be >= 0, got {args.max_identical_samples}"
+        )
     if args.max_late_cycles < 1:
         raise ParameterError(f"--max-late-cycles must be >= 1, got {args.max_late_cycles}")
 
@@ -143,7 +155,8 @@ def _config(args: argparse.Namespace) -> RunConfig:
         max_force_N=args.max_force_N,
         max_torque_Nm=args.max_torque_Nm,
         stale_after_s=args.stale_ms * 1e-3,
-        max_repeated_samples=2,
+        max_repeated_samples=None,  # a late tick is no fault; data older than --stale-ms is
+        max_identical_samples=args.max_identical_samples or None,
     )
     admittance = AdmittanceConfig(
         limits,
@@ -216,6 +229,10 @@ def run(args: argparse.Namespace) -> int:
             f"mean force error over the last {window_s:g} s "
             f"[{e[0]:+.3f} {e[1]:+.3f} {e[2]:+.3f}] N ({args.frame} frame)"
         )
+    if result.timing is not None:
+        print(result.timing.line())
+    if result.observer_dropped_rows:
+        print(f"observers: {result.observer_dropped_rows} log rows dropped (their queue was full)")
     if config.online_load:
         print(f"online load: rate {1.0 / result.period_s:.1f} Hz (1 / the robot's control period)")
         print("\n".join(event_lines(list(result.load_events))))

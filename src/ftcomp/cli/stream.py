@@ -150,6 +150,10 @@ def run(args: argparse.Namespace) -> int:
         f"{result.readings} readings in {result.elapsed_s:.2f} s ({result.rate_hz:.0f} Hz) "
         f"to {output}{_health_text(result.health)}"
     )
+    if result.timing is not None:
+        print(result.timing.line())
+    if result.observer_dropped_rows:
+        print(f"observers: {result.observer_dropped_rows} log rows dropped (their queue was full)")
     if result.online_rate_source:
         print(f"online load: rate {result.online_rate_hz:.1f} Hz ({result.online_rate_source})")
         print("\n".join(event_lines(list(result.load_events))))

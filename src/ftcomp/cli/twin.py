@@ -128,4 +128,6 @@ def run(args: argparse.Namespace) -> int:
         f"ended by {result.reason}",
         flush=True,
     )
+    if result.timing is not None:
+        print(result.timing.line(), flush=True)
     return 0

@@ -79,7 +79,10 @@ class SafetyLimits:
         max_torque_Nm: protective stop when the contact torque's norm exceeds this [N*m].
         stale_after_s: a sample older than this (robot clock minus sample stamp) stops [s].
         max_repeated_samples: consecutive samples with an already seen time stamp tolerated
-            (0: the first repeat stops; raise it when the sensor is slower than the loop).
+            (0: the first repeat stops; raise it when the sensor is slower than the loop);
+            None: no count, a repeat is judged by its age alone (``stale_after_s``): a tick
+            that comes late is not a fault, data older than the stale limit is. A live
+            sensor whose packets jitter (a Net F/T over a network) needs None.
         max_identical_samples: consecutive *new* samples (fresh stamps) with bit-identical values
             tolerated before FROZEN_SAMPLE (a driver repeating a dead value with new stamps);
             None: no check. Set it only for a sensor whose noise makes identical readings
@@ -95,7 +98,7 @@ class SafetyLimits:
     max_force_N: float
     max_torque_Nm: float
     stale_after_s: float
-    max_repeated_samples: int = 0
+    max_repeated_samples: int | None = 0
     max_identical_samples: int | None = None
     sensor_range: tuple[float, float] | None = None
     # sensor_range per axis, [F, F, F, T, T, T], prepared once for check_range.
@@ -108,10 +111,9 @@ class SafetyLimits:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and value > 0.0 and not math.isnan(value)):
                 raise ParameterError(f"{name} must be > 0, got {value!r}")
-        if not (isinstance(self.max_repeated_samples, int) and self.max_repeated_samples >= 0):
-            raise ParameterError(
-                f"max_repeated_samples must be an integer >= 0, got {self.max_repeated_samples!r}"
-            )
+        m = self.max_repeated_samples
+        if m is not None and not (isinstance(m, int) and m >= 0):
+            raise ParameterError(f"max_repeated_samples must be an integer >= 0, got {m!r}")
         n = self.max_identical_samples
         if n is not None and not (isinstance(n, int) and n >= 1):
             raise ParameterError(f"max_identical_samples must be an integer >= 1, got {n!r}")
@@ -179,7 +181,8 @@ def check_sample(
     if t_sample <= state.last_t:
         repeats = state.repeats + 1
         new = state._replace(repeats=repeats, last_now=now)
-        if repeats > limits.max_repeated_samples:
+        m = limits.max_repeated_samples
+        if m is not None and repeats > m:
             return new, StopReason.REPEATED_SAMPLE
         if now - state.last_t > limits.stale_after_s:
             return new, StopReason.STALE_SAMPLE

@@ -76,6 +76,8 @@ TORQUE_UNITS_NM: dict[str, float] = {
 #: Readings kept for :meth:`NetFTSensor.read_new` between two calls (about 10 s at 7 kHz).
 _BACKLOG = 70_000
 _DEFAULT_RDT_PORT = 49152
+#: One record as kept until read: its arrival stamp [ns] and the six values in sensor units.
+_Record = tuple[int, float, float, float, float, float, float]
 
 
 def check_bias_and_calibration(sensor_uri: str, calibration: str | None) -> None:
@@ -156,7 +158,10 @@ class NetFTSensor:
             raise ParameterError(f"{uri.text!r}: {exc}") from None
         self._connect_timeout_s = connect_timeout_s
         self._bias = bias
-        self._backlog: collections.deque[WrenchSample] = collections.deque(maxlen=_BACKLOG)
+        # The records as numbers (_Record): each is converted once, when it is read (the
+        # loop's read() converts only the newest; read_new() every one).
+        self._backlog: collections.deque[_Record] = collections.deque(maxlen=_BACKLOG)
+        self._newest: _Record | None = None
         self._last: WrenchSample | None = None
         self._scale: tuple[float, float] | None = None
         self._units = ("", "")
@@ -212,22 +217,25 @@ class NetFTSensor:
         )
 
     # ----------------------------------------------------------------- reading
-    def _convert(self, sample: pynetft.Sample) -> WrenchSample:
-        if self._scale is None:
-            force_unit, torque_unit = sample.force_unit.value, sample.torque_unit.value
-            if force_unit not in FORCE_UNITS_N or torque_unit not in TORQUE_UNITS_NM:
-                raise HardwareError(
-                    f"{self.uri.text!r}: the sensor reports force in {force_unit!r} and torque "
-                    f"in {torque_unit!r}; known: {', '.join(FORCE_UNITS_N)} and "
-                    f"{', '.join(TORQUE_UNITS_NM)}"
-                )
-            self._scale = (FORCE_UNITS_N[force_unit], TORQUE_UNITS_NM[torque_unit])
-            self._units = (force_unit, torque_unit)
+    def _set_units(self, sample: pynetft.Sample) -> tuple[float, float]:
+        """N per force unit and N*m per torque unit, from the first record's units."""
+        force_unit, torque_unit = sample.force_unit.value, sample.torque_unit.value
+        if force_unit not in FORCE_UNITS_N or torque_unit not in TORQUE_UNITS_NM:
+            raise HardwareError(
+                f"{self.uri.text!r}: the sensor reports force in {force_unit!r} and torque "
+                f"in {torque_unit!r}; known: {', '.join(FORCE_UNITS_N)} and "
+                f"{', '.join(TORQUE_UNITS_NM)}"
+            )
+        self._scale = (FORCE_UNITS_N[force_unit], TORQUE_UNITS_NM[torque_unit])
+        self._units = (force_unit, torque_unit)
+        return self._scale
+
+    def _convert(self, record: _Record) -> WrenchSample:
+        """One kept record as a reading in N and N*m."""
+        assert self._scale is not None  # set by the first record drained
         f, t = self._scale
-        fx, fy, fz = sample.force
-        tx, ty, tz = sample.torque
-        wrench = np.array([fx * f, fy * f, fz * f, tx * t, ty * t, tz * t])
-        return WrenchSample(sample.received_at_ns, wrench)
+        stamp, fx, fy, fz, tx, ty, tz = record
+        return WrenchSample(stamp, np.array([fx * f, fy * f, fz * f, tx * t, ty * t, tz * t]))
 
     def _drain(self) -> None:
         """Move every delivered sample into the backlog; raise on a fault of the stream."""
@@ -236,9 +244,13 @@ class NetFTSensor:
             raise HardwareError(f"{self.uri.text!r}: the stream is closed")
         try:
             for sample in self._client.samples(timeout=0.0):
-                converted = self._convert(sample)
-                self._backlog.append(converted)
-                self._last = converted
+                if self._scale is None:
+                    self._set_units(sample)
+                # A tuple of numbers: the collector soon stops tracking it, so a long backlog
+                # (a loop that only calls read()) adds nothing to its collections.
+                record = (sample.received_at_ns, *sample.force, *sample.torque)
+                self._backlog.append(record)
+                self._newest = record
         except TimeoutError:
             return  # nothing more for now
         except pn.SensorFaultError as exc:
@@ -253,17 +265,28 @@ class NetFTSensor:
         self._running = False
         raise HardwareError(f"{self.uri.text!r}: the stream stopped")
 
+    def _newest_reading(self) -> WrenchSample:
+        """The newest record, converted once."""
+        newest = self._newest
+        if newest is None:
+            raise HardwareError(f"{self.uri.text!r}: no reading yet")
+        if self._last is None or self._last.t_ns != newest[0]:
+            self._last = self._convert(newest)
+        return self._last
+
     def read(self) -> WrenchSample:
         """The newest reading (the same again until a newer one arrives)."""
         self._drain()
-        if self._last is None:
-            raise HardwareError(f"{self.uri.text!r}: no reading yet")
-        return self._last
+        return self._newest_reading()
 
     def read_new(self) -> list[WrenchSample]:
         """Every reading since the previous call, oldest first."""
         self._drain()
-        out = list(self._backlog)
+        if not self._backlog:
+            return []
+        *older, _ = self._backlog
+        out = [self._convert(sample) for sample in older]
+        out.append(self._newest_reading())
         self._backlog.clear()
         return out
 

@@ -28,10 +28,20 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Protocol, runtime_checkable
 
-from ftcomp.io.atomic import atomic_output
+from ftcomp.control.timing import TimingSummary
+from ftcomp.errors import ParameterError
+from ftcomp.io.atomic import atomic_output, atomic_write_text
 from ftcomp.io.timestamps import format_time
 
-__all__ = ["SWITCH_INTERVAL_S", "CsvLog", "LogObserver", "ObserverThread", "csv_log"]
+__all__ = [
+    "SWITCH_INTERVAL_S",
+    "CsvLog",
+    "LogObserver",
+    "ObserverThread",
+    "csv_log",
+    "save_timing",
+    "timing_path",
+]
 
 #: The interpreter's thread switch interval while observers run [s]: about the longest the
 #: control loop waits for the interpreter's lock when an observer is busy (a quarter of a
@@ -69,9 +79,22 @@ class ObserverThread:
     been handed on, closes the observers and raises the first error an observer raised (the
     session itself goes on: a failing log is no reason to stop the arm). While it runs the
     interpreter's switch interval is at most :data:`SWITCH_INTERVAL_S` (module docstring).
+
+    The queue is bounded: an observer slower than the loop (a view on a loaded machine) would
+    otherwise grow it without end. Beyond ``max_queued_rows`` rows waiting, a new row is
+    dropped (never an event) and counted in :attr:`dropped_rows`; the loop is never held up.
+
+    Args:
+        observers: the observers.
+        max_queued_rows: rows that may wait (20000: 20 s at 1 kHz), >= 1.
     """
 
-    def __init__(self, observers: Sequence[LogObserver]) -> None:
+    def __init__(self, observers: Sequence[LogObserver], max_queued_rows: int = 20_000) -> None:
+        if not (isinstance(max_queued_rows, int) and max_queued_rows >= 1):
+            raise ParameterError(f"max_queued_rows must be an integer >= 1, got {max_queued_rows}")
+        self.max_queued_rows = max_queued_rows
+        #: Rows dropped because the queue was full.
+        self.dropped_rows = 0
         self.observers = tuple(observers)
         self._switch_s = sys.getswitchinterval()
         sys.setswitchinterval(min(self._switch_s, SWITCH_INTERVAL_S))
@@ -100,7 +123,11 @@ class ObserverThread:
         self._queue.put(("open", (tuple(columns),)))
 
     def row(self, t_ns: int, row: Sequence[float]) -> None:
-        """Queue one row (the caller must not change ``row`` afterwards)."""
+        """Queue one row (the caller must not change ``row`` afterwards); drop it when
+        ``max_queued_rows`` are waiting."""
+        if self._queue.qsize() >= self.max_queued_rows:
+            self.dropped_rows += 1
+            return
         self._queue.put(("row", (t_ns, row)))
 
     def event(self, t_ns: int, kind: str, text: str) -> None:
@@ -162,6 +189,37 @@ class CsvLog:
         """Tell the observer of an event (see :meth:`LogObserver.event`); no row is written."""
         if self.observer is not None:
             self.observer.event(t_ns, kind, text)
+
+    @property
+    def dropped_rows(self) -> int:
+        """Rows the observers did not see (their queue was full, :class:`ObserverThread`)."""
+        observer = self.observer
+        return observer.dropped_rows if isinstance(observer, ObserverThread) else 0
+
+
+def timing_path(log_path: Path) -> Path:
+    """Where a session's timing block goes: beside its CSV log, ``run.csv`` ->
+    ``run.timing.json`` (a block inside the CSV would break its readers)."""
+    return log_path.with_name(log_path.stem + ".timing.json")
+
+
+def save_timing(log_path: Path, timing: TimingSummary, *, log: CsvLog | None = None) -> Path:
+    """Write a session's timing block (:meth:`TimingSummary.as_dict`, its one line, and with
+    ``log`` the rows its observers dropped) beside its log (:func:`timing_path`, atomically);
+    return the block's path."""
+    import json
+
+    path = timing_path(log_path)
+    document: dict[str, object] = {
+        "format": "ftcomp.timing/1",
+        "log": log_path.name,
+        "line": timing.line(),
+    }
+    document.update(timing.as_dict())
+    if log is not None:
+        document["observer_dropped_rows"] = log.dropped_rows
+    atomic_write_text(path, json.dumps(document, indent=2, allow_nan=False, default=str) + "\n")
+    return path
 
 
 @contextlib.contextmanager

@@ -33,14 +33,16 @@ from scipy.spatial.transform import Rotation
 
 from ftcomp.arrays import freeze_field
 from ftcomp.control.loop import ControlCycle, run_loop
+from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import OrientationEncoding, quat_from_matrix
+from ftcomp.hardware.pacing import on_host_clock
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.samples_csv import write_samples
 from ftcomp.samples import PoseList, Samples
 from ftcomp.session.hand_guided import ManualRecorder, StillCriteria
-from ftcomp.session.log import LogObserver, ObserverThread
+from ftcomp.session.log import LogObserver, ObserverThread, save_timing
 from ftcomp.session.pose_record import (
     PoseEvent,
     PoseRecord,
@@ -179,6 +181,9 @@ class RecordResult:
         samples: the same readings as one :class:`~ftcomp.samples.Samples` (None without any).
         poses_planned: poses the plan asked for.
         duration_s: wall-clock time of the session [s].
+        timing: how the hand-guided session's loop kept time (saved beside the output,
+            :func:`~ftcomp.session.log.timing_path`); None for a robot-driven session, which
+            runs no periodic loop (it moves, settles and reads).
     """
 
     output: Path
@@ -188,6 +193,7 @@ class RecordResult:
     samples: Samples | None = field(repr=False)
     poses_planned: int
     duration_s: float
+    timing: TimingSummary | None = None
 
     def __post_init__(self) -> None:
         if self.ended not in get_args(Ending):
@@ -308,13 +314,21 @@ def record(
     start = time.monotonic()
     ended: Ending = "fault"
     reason = "the session failed before its first pose"  # unless _run_plan returns
+    timing = (
+        LoopTiming(robot.control_period_s, paced=on_host_clock(robot), name="ftcomp record")
+        if isinstance(plan, HandGuided)
+        else None
+    )
     try:
-        ended, reason = _run_plan(robot, sensor, plan, mount, driven, recorded, file)
+        ended, reason = _run_plan(robot, sensor, plan, mount, driven, recorded, file, timing)
     finally:
         if thread is not None:
             last_ns = int(file.records[-1].t_ns[-1]) if file.records else 0
             thread.event(last_ns, "end" if ended == "complete" else "fault", reason or ended)
             thread.close()
+    summary = timing.summary() if timing is not None and timing.cycles else None
+    if summary is not None and file.records:
+        save_timing(output, summary)
     return RecordResult(
         output=output,
         ended=ended,
@@ -323,6 +337,7 @@ def record(
         samples=file.samples,
         poses_planned=plan.n_poses,
         duration_s=time.monotonic() - start,
+        timing=summary,
     )
 
 
@@ -334,6 +349,7 @@ def _run_plan(
     driven: Callable[[PoseRecord], None],
     recorded: Callable[[PoseEvent], None],
     file: _SampleFile,
+    timing: LoopTiming | None,
 ) -> tuple[Ending, str]:
     """Record the plan; how it ended and why (see :func:`record`), the robot stopped."""
     ended: Ending = "complete"
@@ -361,7 +377,7 @@ def _run_plan(
                 recorded,
                 samples_per_pose=plan.samples_per_pose,
             )
-            run_loop(ControlCycle(robot, sensor, mount=mount), recorder)
+            run_loop(ControlCycle(robot, sensor, mount=mount), recorder, timing=timing)
     except KeyboardInterrupt:
         ended, reason = "interrupted", "interrupted (Ctrl-C)"
     except FtcompError as exc:

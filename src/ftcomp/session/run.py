@@ -40,13 +40,15 @@ from ftcomp.control.laws import (
 )
 from ftcomp.control.loop import ControlCycle, run_loop
 from ftcomp.control.safety import SafetyLimits
+from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import quat_from_matrix
+from ftcomp.hardware.pacing import on_host_clock
 from ftcomp.hardware.protocols import Mount, Robot, TakesControl, WrenchSensor
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
 from ftcomp.session.compliant import CompliantStep, CycleRecord, SettleRule
-from ftcomp.session.log import CsvLog, LogObserver, csv_log
+from ftcomp.session.log import CsvLog, LogObserver, csv_log, save_timing
 from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, LoadTracker, require_tool_weight
 
 __all__ = [
@@ -222,6 +224,10 @@ class RunResult:
             ``settle.hold_s`` (0.3 s without a rule) [N], control frame, (3,) (NaN: no cycle).
         log: the log's path.
         load_events: the online load's grasp, release and contact events (empty without it).
+        timing: how the loop kept time (:class:`~ftcomp.control.timing.TimingSummary`; its
+            block is saved beside the log, :func:`~ftcomp.session.log.timing_path`).
+        observer_dropped_rows: log rows the observers (MCAP, view) did not get: their queue
+            was full.
     """
 
     outcome: str
@@ -233,6 +239,8 @@ class RunResult:
     final_error: NDArray[np.float64] = field(repr=False)
     log: Path
     load_events: tuple[LoadEvent, ...] = ()
+    timing: TimingSummary | None = None
+    observer_dropped_rows: int = 0
 
     @property
     def faulted(self) -> bool:
@@ -371,19 +379,26 @@ def run_compliant(
             dry_run=config.dry_run,
             max_late_cycles=config.max_late_cycles,
         )
+        timing = LoopTiming(period_s, paced=on_host_clock(robot), name="ftcomp run")
         try:
-            run_loop(cycle, step)
+            run_loop(cycle, step, timing=timing)
             outcome = step.outcome
         except KeyboardInterrupt:
             outcome, message = "interrupted", "interrupted (Ctrl-C)"
         except FtcompError as exc:
             outcome, message = "error", str(exc)
         if not message and outcome == "loop_late":
-            message = f"loop late: the robot missed {config.max_late_cycles} periods in a row"
+            message = (
+                f"loop late: the robot missed {config.max_late_cycles} periods in a row "
+                f"(worst start {timing.summary().lateness_max_s * 1e3:.1f} ms late)"
+            )
         elif not message and step.faulted:
             message = f"protective stop: {outcome}"
         if observers:
             _tell_end(log, t0_ns[0] if t0_ns else 0, summary.t_ns, load, outcome, message)
+        loop_timing = timing.summary()
+        save_timing(log_path, loop_timing, log=log)
+        dropped = log.dropped_rows
     duration_s, travel_m, final_error = summary.figures()
     return RunResult(
         outcome=outcome,
@@ -395,4 +410,6 @@ def run_compliant(
         final_error=final_error,
         log=log_path,
         load_events=tuple(load.events) if load is not None else (),
+        timing=loop_timing,
+        observer_dropped_rows=dropped,
     )

@@ -24,8 +24,10 @@ from numpy.typing import NDArray
 from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.loop import ControlCycle, Reading, run_loop
+from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import quat_from_matrix
+from ftcomp.hardware.pacing import on_host_clock
 from ftcomp.hardware.protocols import (
     CountsLostPackets,
     Mount,
@@ -37,7 +39,7 @@ from ftcomp.hardware.protocols import (
 from ftcomp.hardware.replay import EndOfReplayError
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
-from ftcomp.session.log import LogObserver, csv_log
+from ftcomp.session.log import LogObserver, csv_log, save_timing
 from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, StreamLoad, require_tool_weight
 
 __all__ = [
@@ -206,6 +208,9 @@ class StreamResult:
         online_rate_hz: the rate the online load estimate used [Hz] (NaN without it).
         online_rate_source: how that rate was found ("" without it).
         load_events: the online load's grasp, release and contact events.
+        timing: how the loop kept time (its block is saved beside the log,
+            :func:`~ftcomp.session.log.timing_path`).
+        observer_dropped_rows: log rows the observers did not get (their queue was full).
     """
 
     outcome: str
@@ -217,6 +222,8 @@ class StreamResult:
     online_rate_hz: float = math.nan
     online_rate_source: str = ""
     load_events: tuple[LoadEvent, ...] = ()
+    timing: TimingSummary | None = None
+    observer_dropped_rows: int = 0
 
     @property
     def rate_hz(self) -> float:
@@ -311,8 +318,9 @@ def stream(
 
             sinks.append(progress)
         cycle = ControlCycle(robot, sensor, mount=mount)  # the logger compensates
+        timing = LoopTiming(cycle.period_s, paced=on_host_clock(robot), name="ftcomp stream")
         try:
-            run_loop(cycle, logger, sinks=sinks)
+            run_loop(cycle, logger, sinks=sinks, timing=timing)
         except EndOfReplayError:
             outcome = "end_of_replay"
         except KeyboardInterrupt:
@@ -326,6 +334,9 @@ def stream(
             log.event(round(event.confirmed_t_s * 1e9), event.kind, event.describe())
         end_ns = t0_ns + round(logger.elapsed_s * 1e9)
         log.event(end_ns, "fault" if message else "end", message or outcome)
+        loop_timing = timing.summary()
+        save_timing(log_path, loop_timing, log=log)
+        dropped = log.dropped_rows
     health = sensor.stream_health() if isinstance(sensor, ReportsStreamHealth) else None
     return StreamResult(
         outcome=outcome,
@@ -337,4 +348,6 @@ def stream(
         online_rate_hz=online.rate_Hz if online is not None else math.nan,
         online_rate_source=online.rate_source if online is not None else "",
         load_events=tuple(online.events) if online is not None else (),
+        timing=loop_timing,
+        observer_dropped_rows=dropped,
     )

@@ -23,6 +23,7 @@ import collections
 import contextlib
 import csv
 import dataclasses
+import gc
 import ipaddress
 import math
 import signal
@@ -37,6 +38,7 @@ from typing import Any, Final
 
 import numpy as np
 
+from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import ParameterError
 from ftcomp.frames import rotvec_from_matrix
 from ftcomp.hardware.registry import parse_uri
@@ -188,6 +190,8 @@ class TwinResult:
         step_us_p50, step_us_p99: the cycle's compute time [us], percentiles.
         reason: why it ended (``time``, ``signal``).
         realtime: whether the loop got real-time priority (SCHED_FIFO).
+        timing: the loop's timing (:class:`~ftcomp.control.timing.TimingSummary`, as every
+            live loop of ftcomp reports it; ``late_cycles`` and the step percentiles are its).
     """
 
     cycles: int
@@ -198,6 +202,7 @@ class TwinResult:
     step_us_p99: float
     reason: str
     realtime: bool = False
+    timing: TimingSummary | None = None
 
 
 @contextlib.contextmanager
@@ -355,8 +360,12 @@ class _Twin:
     def run(self, seconds: float, stop: threading.Event, log: Any) -> TwinResult:
         cell, ctl = self.cell, self.controller
         realtime = self.config.realtime and realtime_priority(RT_PRIORITY + 2)
-        steps: list[float] = []
-        late = cycles = 0
+        timing = LoopTiming(_CYCLE_S, name="ftcomp twin")
+        timing.realtime = realtime
+        # The cell's set-up (MuJoCo, numpy, scipy) is frozen out of the collector: a full
+        # collection over it took 30-40 ms, a stall that starved the Net F/T stream.
+        gc.collect()
+        gc.freeze()
         start = time.monotonic()
         due = start
         rng = np.random.default_rng(self.config.seed + 7)
@@ -368,7 +377,7 @@ class _Twin:
                 break
             if now - start >= seconds:
                 break
-            t0 = time.perf_counter()
+            timing.start()
             self._fire_fault(now)
             w_contact = cell.true_contact_wrench_base(cell.sensor_pose()[0])
             twist = ctl.cycle(float(np.linalg.norm(w_contact[:3])))
@@ -409,26 +418,24 @@ class _Twin:
                         "protective_stop" if ctl.safety.protective_stop else "normal",
                     ]
                 )
-            steps.append(time.perf_counter() - t0)
-            cycles += 1
+            timing.sent()
             due += _CYCLE_S
             wait = due - time.monotonic()
             if wait > 0:
                 time.sleep(wait)
-            elif wait < -_CYCLE_S:
-                late += 1
-                if wait < -0.05:  # far behind (a stall): start the schedule again
-                    due = time.monotonic()
-        us = np.array(steps) * 1e6 if steps else np.zeros(1)
+            elif wait < -0.05:  # far behind (a stall): start the schedule again
+                due = time.monotonic()
+        summary = timing.summary()
         return TwinResult(
-            cycles=cycles,
-            late_cycles=late,
+            cycles=summary.cycles,
+            late_cycles=summary.late_cycles,
             rtde_packets=self.packets_closed + sum(s.packets for s in self.sessions),
             rdt_records=0,
-            step_us_p50=float(np.percentile(us, 50)),
-            step_us_p99=float(np.percentile(us, 99)),
+            step_us_p50=summary.compute_p50_s * 1e6 if summary.cycles else 0.0,
+            step_us_p99=summary.compute_p99_s * 1e6 if summary.cycles else 0.0,
             reason=reason,
             realtime=realtime,
+            timing=summary,
         )
 
 
