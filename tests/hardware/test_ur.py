@@ -187,6 +187,29 @@ def test_an_unreachable_pose_is_refused_before_any_move(
     assert "moveL" not in CheckedControl.calls
 
 
+@pytest.mark.parametrize("command", ["speedl", "servol"])
+def test_a_refused_motion_command_is_a_fault(
+    request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch, command: str
+) -> None:
+    """ur_rtde's speedL/servoL return False once its script stopped (from the pendant)."""
+
+    class ScriptStopped(CheckedControl):
+        def speedL(self, *args: Any) -> bool:
+            return False
+
+        def servoL(self, *args: Any) -> bool:
+            return False
+
+    monkeypatch.setattr(rtde_control, "RTDEControlInterface", ScriptStopped)
+    host = loopback_address(request.node.name)
+    with (
+        running("fake_ur", host, _scenario().to_json()),
+        open_robot(f"ur://{host}?command={command}") as robot,
+        pytest.raises(HardwareError, match=r"refused .*script is not running"),
+    ):
+        robot.command_twist(np.array([0.0, 0.0, -0.005, 0.0, 0.0, 0.0]))
+
+
 # ----------------------------------------------------------------- the receive side
 def test_pose_and_built_in_sensor_are_converted_to_our_frames(
     request: pytest.FixtureRequest,

@@ -313,7 +313,7 @@ class URRobot(LatenessOfPacer):
         self._moving = True
         dt = self.control_period_s
         if self.command == "speedl":
-            control.speedL(tw.tolist(), self.max_accel_m_s2, 0.0)
+            self._sent(control.speedL(tw.tolist(), self.max_accel_m_s2, 0.0), "speedL")
             return
         if self._servo_target is None:
             here = self.pose()
@@ -322,7 +322,17 @@ class URRobot(LatenessOfPacer):
         p = p + tw[:3] * dt
         R = matrix_from_rotvec(tw[3:] * dt) @ R
         self._servo_target = (p, R)
-        control.servoL(_pose_list(p, R), 0.0, 0.0, dt, 0.1, 300.0)
+        self._sent(control.servoL(_pose_list(p, R), 0.0, 0.0, dt, 0.1, 300.0), "servoL")
+
+    def _sent(self, accepted: bool, command: str) -> None:
+        """Raise when the controller refused a motion command: ``ur_rtde`` returns False when
+        its control script no longer runs (stopped from the pendant, another program started),
+        and a loop that keeps commanding into nothing no longer controls the arm."""
+        if not accepted:
+            raise HardwareError(
+                f"{self.uri.text!r}: the controller refused {command} (its control script is not "
+                "running: stopped from the pendant or another program started?); motion stopped"
+            )
 
     def wait_cycle(self) -> None:
         """Wait for the next control period (host clock)."""
