@@ -170,4 +170,4 @@ def test_a_live_stream_says_that_it_does_not_apply_the_drift(tmp_path, capsys) -
     out = tmp_path / "log.csv"
     argv = ["stream", "--robot", "sim://", "--sensor", "sim://", "-c", str(cal)]
     assert main([*argv, "--seconds", "0.05", "-o", str(out)]) == 0
-    assert "bias drift model is not applied live" in capsys.readouterr().err
+    assert "bias drift model is held at the end of its session live" in capsys.readouterr().err

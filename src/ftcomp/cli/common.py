@@ -11,7 +11,14 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from ftcomp.calibration_record import Calibration
 
-__all__ = ["add_range_argument", "parse_range", "print_warnings", "warn_live_drift"]
+__all__ = [
+    "add_range_argument",
+    "add_track_bias_argument",
+    "bias_tracking_line",
+    "parse_range",
+    "print_warnings",
+    "warn_live_drift",
+]
 
 
 def parse_range(text: str) -> tuple[float, float]:
@@ -50,8 +57,31 @@ def warn_live_drift(calibration: Calibration, path: str) -> None:
     if calibration.bias_drift is not None:
         print_warnings(
             [
-                f"{path}: the bias drift model is not applied live (its times are the "
-                "recording's clock); the bias at the end of the calibration is used: run "
-                "ftcomp rebias at the start of a session"
+                f"{path}: the bias drift model is held at the end of its session live (its "
+                "times are the recording's clock, never extrapolated); to follow the bias "
+                "since, add --track-bias or run ftcomp rebias at the start"
             ]
         )
+
+
+def add_track_bias_argument(parser: argparse.ArgumentParser) -> None:
+    """``--track-bias``: the bias follows the sensor while the arm is still and free."""
+    parser.add_argument(
+        "--track-bias",
+        action="store_true",
+        help="let the calibration's bias follow the sensor while the arm is still and nothing "
+        "touches the tool (compensated force < 1 N and torque < 0.05 N·m, orientation steady "
+        "for 0.5 s; at most 0.05 N/s, 2 N in all); the log gains bias_updated (default: off; "
+        "a steady contact lighter than 1 N would be taken for bias)",
+    )
+
+
+def bias_tracking_line(correction: Iterable[float] | None, updates: int) -> str | None:
+    """One line on what the bias tracking did (None when it was off)."""
+    if correction is None:
+        return None
+    c = list(correction)
+    return (
+        f"bias tracking: {updates} updates, the bias moved by [{c[0]:+.3f} {c[1]:+.3f} "
+        f"{c[2]:+.3f}] N [{c[3]:+.4f} {c[4]:+.4f} {c[5]:+.4f}] N·m from the calibration's"
+    )

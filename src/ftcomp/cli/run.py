@@ -26,7 +26,7 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from ftcomp.cli.common import warn_live_drift
+from ftcomp.cli.common import add_track_bias_argument, bias_tracking_line, warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import add_view_arguments
 from ftcomp.errors import ParameterError
@@ -60,6 +60,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="weigh a grasped load online (rate: 1 / the robot's control period [Hz]) and "
         "compensate it too (default: off, the tool alone)",
     )
+    add_track_bias_argument(parser)
     p("--law", choices=_LAWS, default="combined", help="admittance law (default combined)")
     p("--axes", default="z", help="axes that yield to force, e.g. z or x,y,z,rz (default z)")
     p("--frame", choices=("base", "sensor"), default="base", help="axes of --axes (base)")
@@ -109,6 +110,8 @@ def register(parser: argparse.ArgumentParser) -> None:
 
 
 def _check(args: argparse.Namespace) -> None:
+    if args.track_bias and args.online_load:
+        raise ParameterError("--track-bias and --online-load: choose one")
     if len(args.wrench_desired) != 6 or not all(map(math.isfinite, args.wrench_desired)):
         raise ParameterError("--wrench-desired needs six finite numbers FX,FY,FZ,TX,TY,TZ")
     for name in ("k1", "k2", "k1_rot", "k2_rot", "damping", "stiffness"):
@@ -143,6 +146,7 @@ def _config(args: argparse.Namespace) -> RunConfig:
     """The run's configuration from the arguments, in SI units."""
     import numpy as np
 
+    from ftcomp.compensation.bias_tracking import BiasTrackingConfig
     from ftcomp.control.safety import SafetyLimits
     from ftcomp.session.compliant import SettleRule
     from ftcomp.session.run import AdmittanceConfig, RunConfig
@@ -179,6 +183,7 @@ def _config(args: argparse.Namespace) -> RunConfig:
         dry_run=args.dry_run,
         max_late_cycles=args.max_late_cycles,
         online_load=args.online_load,
+        track_bias=BiasTrackingConfig() if args.track_bias else None,
     )
 
 
@@ -233,6 +238,9 @@ def run(args: argparse.Namespace) -> int:
         print(result.timing.line())
     if result.observer_dropped_rows:
         print(f"observers: {result.observer_dropped_rows} log rows dropped (their queue was full)")
+    tracking = bias_tracking_line(result.bias_correction, result.bias_updates)
+    if tracking is not None:
+        print(tracking)
     if config.online_load:
         print(f"online load: rate {1.0 / result.period_s:.1f} Hz (1 / the robot's control period)")
         print("\n".join(event_lines(list(result.load_events))))

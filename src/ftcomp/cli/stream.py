@@ -24,7 +24,7 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from ftcomp.cli.common import warn_live_drift
+from ftcomp.cli.common import add_track_bias_argument, bias_tracking_line, warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import StatusLine, add_view_arguments
 from ftcomp.errors import ParameterError
@@ -64,6 +64,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         f"measured from the stamps of the first {_MEASURE_S:g} s of readings, held back and "
         "then logged)",
     )
+    add_track_bias_argument(parser)
     parser.add_argument("--seconds", type=float, required=True, help="how long to log [s]")
     parser.add_argument(
         "-o", "--output", required=True, metavar="LOG.csv", help="the log, one row per reading"
@@ -84,6 +85,7 @@ def _health_text(health: StreamHealth | None) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Open, stream, report."""
+    from ftcomp.compensation.bias_tracking import BiasTrackingConfig
     from ftcomp.io.atomic import check_writable
     from ftcomp.io.calibration_json import load_calibration
     from ftcomp.session.online_load import event_lines
@@ -92,6 +94,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.online_rate_hz is not None and not args.online_load:
         raise ParameterError("--online-rate-hz needs --online-load")
+    if args.track_bias and (args.online_load or not args.calibration):
+        raise ParameterError("--track-bias needs the tool's calibration (-c) and not --online-load")
     if args.online_load and not args.calibration:
         raise ParameterError(
             "--online-load needs the tool's calibration: give -c CALIBRATION.json "
@@ -107,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
         with_pose=args.robot is not None,
         online_load=args.online_load,
         online_rate_hz=rate,
+        track_bias=BiasTrackingConfig() if args.track_bias else None,
     )
     inputs = [args.calibration] if args.calibration else []
     output = check_writable(args.output, overwrite=args.force, inputs=inputs)
@@ -154,6 +159,9 @@ def run(args: argparse.Namespace) -> int:
         print(result.timing.line())
     if result.observer_dropped_rows:
         print(f"observers: {result.observer_dropped_rows} log rows dropped (their queue was full)")
+    tracking = bias_tracking_line(result.bias_correction, result.bias_updates)
+    if tracking is not None:
+        print(tracking)
     if result.online_rate_source:
         print(f"online load: rate {result.online_rate_hz:.1f} Hz ({result.online_rate_source})")
         print("\n".join(event_lines(list(result.load_events))))

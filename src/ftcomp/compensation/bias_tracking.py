@@ -15,8 +15,8 @@ Use::
     tracker = BiasTracker(BiasTrackingConfig(), initial_std=...)
     each cycle:
         contact = compensator.compensate(wrench_sensor, R_base_sensor)
-        updated = tracker.update(t_s, contact, R_base_sensor)   # bool: the log column
-        contact = contact - tracker.correction                 # the corrected contact wrench
+        contact = tracker.correct(t_s, contact, R_base_sensor)  # update, then subtract
+        tracker.updated                                         # bool: the log column
 
 It costs about 10 us a cycle (Python floats; the one ``correction`` array updated in place).
 """
@@ -108,6 +108,7 @@ class BiasTracker:
         self._rate = [c.max_rate_force_N_per_s] * 3 + [c.max_rate_torque_Nm_per_s] * 3
         self._limit = [c.max_correction_force_N] * 3 + [c.max_correction_torque_Nm] * 3
         self._c = [0.0] * 6
+        self._x = [0.0] * 6  # the Kalman estimate; _c follows it rate-limited
         self._t: float | None = None
         self._R: list[float] | None = None
         self._still_since: float | None = None
@@ -160,16 +161,28 @@ class BiasTracker:
         self.updated = False
         if not go or dt <= 0.0:
             return False
+        x = self._x
         for j in range(6):
+            # The Kalman estimate of the bias's change, on the reading as it is (clipping each
+            # noisy step would turn the rate limit into a far slower filter) ...
             gain = var[j] / (var[j] + self._r2[j])
-            step = gain * corrected[j]
-            most = self._rate[j] * dt
-            step = most if step > most else (-most if step < -most else step)
-            value = cor[j] + step
             limit = self._limit[j]
-            cor[j] = limit if value > limit else (-limit if value < -limit else value)
+            value = x[j] + gain * (w[j] - x[j])
+            x[j] = limit if value > limit else (-limit if value < -limit else value)
             var[j] *= 1.0 - gain
+            # ... and the correction applied follows it at most max_rate.
+            most = self._rate[j] * dt
+            step = x[j] - cor[j]
+            cor[j] += most if step > most else (-most if step < -most else step)
         self.correction[:] = cor
         self.updated = True
         self.updates += 1
         return True
+
+    def correct(
+        self, t_s: float, contact_sensor: ArrayLike, R_base_sensor: ArrayLike
+    ) -> NDArray[np.float64]:
+        """:meth:`update`, then the contact wrench with the tracked change of the bias removed
+        (a new (6,) array): what a live loop uses."""
+        self.update(t_s, contact_sensor, R_base_sensor)
+        return np.asarray(contact_sensor, dtype=float) - self.correction

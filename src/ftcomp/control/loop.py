@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp.compensation.bias_tracking import BiasTracker
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import HardwareError, ParameterError
@@ -85,6 +86,8 @@ class ControlCycle:
         mount: the sensor frame on the TCP (identity by default).
         compensator: removes bias and tool gravity with the identified calibration; None passes
             the raw reading on (the paper's uncompensated comparison).
+        bias_tracker: follows the bias while the arm is still and free, after the compensator
+            (None: the calibration's bias).
         rate_limiter: holds the loop to wall-clock time after each ``robot.wait_cycle()``;
             None when the robot paces the loop (simulation, a driver that blocks per period).
         max_late_cycles: this many overruns in a row are a fault (:class:`LoopOverrunError`,
@@ -99,6 +102,7 @@ class ControlCycle:
         *,
         mount: Mount | None = None,
         compensator: GravityCompensator | None = None,
+        bias_tracker: BiasTracker | None = None,
         rate_limiter: RateLimiter | None = None,
         max_late_cycles: int = 10,
     ) -> None:
@@ -109,6 +113,7 @@ class ControlCycle:
         self.sensor = sensor
         self.mount = mount if mount is not None else Mount()
         self.compensator = compensator
+        self.bias_tracker = bias_tracker
         self.rate_limiter = rate_limiter
         self.period_s = robot.control_period_s
 
@@ -119,6 +124,8 @@ class ControlCycle:
         p, R = self.mount.sensor_pose(pose.p_base_tcp, pose.R_base_tcp)
         w = sample.wrench_sensor
         contact = w if self.compensator is None else self.compensator.compensate(w, R)
+        if self.bias_tracker is not None:  # the bias followed while still and free
+            contact = self.bias_tracker.correct(sample.t_ns * 1e-9, contact, R)
         return Reading(sample.t_ns, pose.t_ns, w, contact, p, R, pose.R_base_tcp)
 
     def command(self, twist_sensor_base: NDArray[np.float64], reading: Reading) -> None:

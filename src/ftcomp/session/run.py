@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.calibration_record import Calibration
+from ftcomp.compensation.bias_tracking import BiasTracker, BiasTrackingConfig
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.controller import AdmittanceController, ControlFrame
 from ftcomp.control.filters import LowPassFilter
@@ -191,6 +192,10 @@ class RunConfig:
         max_late_cycles: missed periods in a row that stop the run, >= 1.
         online_load: weigh a grasped load online (rate: 1 / the robot's control period) and
             compensate it too once weighed; start with the gripper empty.
+        track_bias: let the bias follow the sensor while the arm is still and free
+            (:class:`~ftcomp.compensation.bias_tracking.BiasTracker`; not with
+            ``online_load``). A steady contact lighter than its contact thresholds cannot be
+            told from a bias change: keep it off for a run that presses less than that.
     """
 
     admittance: AdmittanceConfig
@@ -199,8 +204,11 @@ class RunConfig:
     dry_run: bool = False
     max_late_cycles: int = 10
     online_load: bool = False
+    track_bias: BiasTrackingConfig | None = None
 
     def __post_init__(self) -> None:
+        if self.track_bias is not None and self.online_load:
+            raise ParameterError("track the bias or weigh a load online, not both")
         if not (math.isfinite(self.duration_s) and self.duration_s > 0.0):
             raise ParameterError(f"duration_s must be > 0, got {self.duration_s}")
         if not (isinstance(self.max_late_cycles, int) and self.max_late_cycles >= 1):
@@ -228,6 +236,9 @@ class RunResult:
             block is saved beside the log, :func:`~ftcomp.session.log.timing_path`).
         observer_dropped_rows: log rows the observers (MCAP, view) did not get: their queue
             was full.
+        bias_correction: the tracked bias minus the calibration's at the end [N, N*m], (6,)
+            (None: not tracking).
+        bias_updates: cycles that moved the tracked bias.
     """
 
     outcome: str
@@ -241,6 +252,8 @@ class RunResult:
     load_events: tuple[LoadEvent, ...] = ()
     timing: TimingSummary | None = None
     observer_dropped_rows: int = 0
+    bias_correction: NDArray[np.float64] | None = field(default=None, repr=False)
+    bias_updates: int = 0
 
     @property
     def faulted(self) -> bool:
@@ -342,8 +355,11 @@ def run_compliant(
 
         online = OnlineLoadCompensator(calibration, OnlineSettings(rate_Hz=1.0 / period_s))
         compensator, load = online, LoadTracker(online)
-    cycle = ControlCycle(robot, sensor, mount=mount, compensator=compensator)
+    tracker = BiasTracker(config.track_bias) if config.track_bias is not None else None
+    cycle = ControlCycle(robot, sensor, mount=mount, compensator=compensator, bias_tracker=tracker)
     columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if load is not None else RUN_COLUMNS
+    if tracker is not None:
+        columns = (*columns, "bias_updated")
     summary = _Summary(config.settle.hold_s if config.settle is not None else 0.3)
     outcome, message = "", ""
     with csv_log(log_path, columns, digits=17, observers=observers) as log:
@@ -367,6 +383,8 @@ def run_compliant(
             ]
             if load is not None:
                 row += load.update(t_s)
+            if tracker is not None:
+                row.append(1.0 if tracker.updated else 0.0)
             log.write(row, r.now_ns)
             summary.add(record)
 
@@ -412,4 +430,6 @@ def run_compliant(
         load_events=tuple(load.events) if load is not None else (),
         timing=loop_timing,
         observer_dropped_rows=dropped,
+        bias_correction=tracker.correction.copy() if tracker is not None else None,
+        bias_updates=tracker.updates if tracker is not None else 0,
     )

@@ -15,13 +15,14 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.calibration_record import Calibration
+from ftcomp.compensation.bias_tracking import BiasTracker, BiasTrackingConfig
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.loop import ControlCycle, Reading, run_loop
 from ftcomp.control.timing import LoopTiming, TimingSummary
@@ -55,17 +56,19 @@ Row = Sequence[float]
 
 
 def stream_columns(
-    *, with_pose: bool, compensated: bool, online_load: bool = False
+    *, with_pose: bool, compensated: bool, online_load: bool = False, tracked: bool = False
 ) -> tuple[str, ...]:
     """Columns of ``ftcomp stream``'s log: ``t`` [s, session clock], the raw wrench, with a pose
     the sensor's orientation (``qx,qy,qz,qw``) and origin (``px,py,pz`` [m], base frame), when
     compensating the contact wrench ``cfx..ctz``, and with ``online_load`` (compensating) the
-    load estimate (:data:`~ftcomp.session.online_load.LOAD_COLUMNS`). With a pose it is a
+    load estimate (:data:`~ftcomp.session.online_load.LOAD_COLUMNS`), with the bias tracked
+    ``bias_updated`` (1 in a row whose reading moved the tracked bias). With a pose it is a
     valid sample CSV."""
     pose = ("qx", "qy", "qz", "qw", "px", "py", "pz") if with_pose else ()
     contact = tuple(f"c{c}" for c in WRENCH_COLUMNS) if compensated or online_load else ()
     load = LOAD_COLUMNS if online_load else ()
-    return ("t", *WRENCH_COLUMNS, *pose, *contact, *load)
+    tracking = ("bias_updated",) if tracked else ()
+    return ("t", *WRENCH_COLUMNS, *pose, *contact, *load, *tracking)
 
 
 class StreamLogger:
@@ -91,13 +94,14 @@ class StreamLogger:
         with_pose: bool,
         compensator: GravityCompensator | None = None,
         online: StreamLoad | None = None,
+        tracker: BiasTracker | None = None,
     ) -> None:
         if not (math.isfinite(duration_s) and duration_s > 0.0):
             raise ParameterError(f"the duration must be > 0 s, got {duration_s}")
         if compensator is not None and online is not None:
             raise ParameterError("give a compensator or an online load estimate, not both")
         self.sensor, self.write_row, self.with_pose = sensor, write_row, with_pose
-        self.compensator, self.online = compensator, online
+        self.compensator, self.online, self.tracker = compensator, online, tracker
         self.duration_ns = round(duration_s * 1e9)
         self.t0_ns: int | None = None
         self.count = 0
@@ -128,7 +132,11 @@ class StreamLogger:
                 continue
             if self.compensator is not None:
                 contact = self.compensator.compensate(w, r.R_base_sensor)
-                row += contact.tolist()
+                if self.tracker is not None:
+                    contact = self.tracker.correct(sample.t_ns * 1e-9, contact, r.R_base_sensor)
+                    row += [*contact.tolist(), 1.0 if self.tracker.updated else 0.0]
+                else:
+                    row += contact.tolist()
                 self.contact_force_N = float(np.linalg.norm(contact[:3]))
             self.write_row(row)
         return self._zero
@@ -151,6 +159,9 @@ class StreamConfig:
         online_rate_hz: the readings' rate for the online estimate [Hz]; None: measured from
             the stamps of the first readings (held back, then logged).
         progress_period_s: how often ``on_progress`` is called [s].
+        track_bias: let the bias follow the sensor while the arm is still and free
+            (:class:`~ftcomp.compensation.bias_tracking.BiasTracker`; needs a calibration, not
+            with ``online_load``); None: the calibration's bias.
     """
 
     duration_s: float
@@ -158,6 +169,7 @@ class StreamConfig:
     online_load: bool = False
     online_rate_hz: float | None = None
     progress_period_s: float = 0.25
+    track_bias: BiasTrackingConfig | None = None
 
     def __post_init__(self) -> None:
         for name in ("duration_s", "progress_period_s"):
@@ -169,6 +181,8 @@ class StreamConfig:
             raise ParameterError("online_rate_hz needs online_load")
         if rate is not None and not (math.isfinite(rate) and 0.0 < rate <= 100_000.0):
             raise ParameterError(f"online_rate_hz must be in (0, 100000] Hz, got {rate:g}")
+        if self.track_bias is not None and self.online_load:
+            raise ParameterError("track the bias or weigh a load online, not both")
 
 
 @dataclass(frozen=True)
@@ -211,6 +225,9 @@ class StreamResult:
         timing: how the loop kept time (its block is saved beside the log,
             :func:`~ftcomp.session.log.timing_path`).
         observer_dropped_rows: log rows the observers did not get (their queue was full).
+        bias_correction: the tracked bias minus the calibration's at the end [N, N*m], (6,)
+            (None: not tracking).
+        bias_updates: readings that moved the tracked bias.
     """
 
     outcome: str
@@ -224,6 +241,8 @@ class StreamResult:
     load_events: tuple[LoadEvent, ...] = ()
     timing: TimingSummary | None = None
     observer_dropped_rows: int = 0
+    bias_correction: NDArray[np.float64] | None = field(default=None, repr=False)
+    bias_updates: int = 0
 
     @property
     def rate_hz(self) -> float:
@@ -282,8 +301,14 @@ def stream(
     compensator = (
         GravityCompensator(calibration) if calibration is not None and online is None else None
     )
+    if config.track_bias is not None and compensator is None:
+        raise ParameterError("tracking the bias needs the tool's calibration")
+    tracker = BiasTracker(config.track_bias) if config.track_bias is not None else None
     columns = stream_columns(
-        with_pose=with_pose, compensated=calibration is not None, online_load=online is not None
+        with_pose=with_pose,
+        compensated=calibration is not None,
+        online_load=online is not None,
+        tracked=tracker is not None,
     )
     lost = sensor if isinstance(sensor, CountsLostPackets) else None
     outcome, message = "duration", ""
@@ -295,6 +320,7 @@ def stream(
             with_pose=with_pose,
             compensator=compensator,
             online=online,
+            tracker=tracker,
         )
         sinks = []
         if on_progress is not None:
@@ -350,4 +376,6 @@ def stream(
         load_events=tuple(online.events) if online is not None else (),
         timing=loop_timing,
         observer_dropped_rows=dropped,
+        bias_correction=tracker.correction.copy() if tracker is not None else None,
+        bias_updates=tracker.updates if tracker is not None else 0,
     )
