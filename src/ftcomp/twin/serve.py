@@ -38,7 +38,7 @@ from typing import Any, Final
 import numpy as np
 
 from ftcomp.errors import ParameterError
-from ftcomp.frames import rotvec_from_matrix
+from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
 from ftcomp.hardware.registry import parse_uri
 from ftcomp.io.atomic import atomic_output, atomic_write_text
 from ftcomp.io.truth_json import truth_document
@@ -66,7 +66,7 @@ from ftcomp.twin.ports import (
 )
 from ftcomp.twin.rtde import RtdeSession
 
-__all__ = ["FAULTS", "ROBOTS", "TwinConfig", "TwinResult", "serve_twin"]
+__all__ = ["FAULTS", "ROBOTS", "TwinConfig", "TwinResult", "flange_wrenches", "serve_twin"]
 
 #: Robots the twin answers as.
 ROBOTS: Final = ("ur5e",)
@@ -106,6 +106,12 @@ class TwinConfig:
         fault: a fault of :data:`FAULTS` to inject, or None.
         fault_at_s: when, after the first RTDE client started streaming [s].
         realtime: ask for SCHED_FIFO for the loop and the Net F/T's sender (as ur_rtde does).
+        tcp_offset_mm: the controller's TCP offset, the TCP origin in the flange frame [mm]
+            (PolyScope's Installation > TCP). The TCP is the wrist sensor's frame, so the
+            flange sits behind it by this offset; ``actual_TCP_force`` is reported about that
+            flange origin and ``ft_raw_wrench`` in that flange frame, as an e-Series does.
+        tcp_rotvec_rad: the TCP offset's rotation (TCP axes in the flange frame), a rotation
+            vector [rad].
     """
 
     robot_host: str
@@ -124,6 +130,8 @@ class TwinConfig:
     fault: str | None = None
     fault_at_s: float = 1.0
     realtime: bool = True
+    tcp_offset_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    tcp_rotvec_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         for name in ("robot_host", "sensor_host"):
@@ -160,6 +168,19 @@ class TwinConfig:
             raise ParameterError(f"seed must be >= 0, got {self.seed}")
         if not (math.isfinite(self.gain_error_percent) and abs(self.gain_error_percent) < 50.0):
             raise ParameterError("gain_error_percent must be within +-50 %")
+        if len(self.tcp_offset_mm) != 3 or any(
+            not math.isfinite(v) or abs(v) > 500.0 for v in self.tcp_offset_mm
+        ):
+            raise ParameterError(
+                f"tcp_offset_mm must be 3 values within +-500, got {self.tcp_offset_mm}"
+            )
+        if len(self.tcp_rotvec_rad) != 3 or not (
+            all(math.isfinite(v) for v in self.tcp_rotvec_rad)
+            and math.hypot(*self.tcp_rotvec_rad) <= math.pi
+        ):
+            raise ParameterError(
+                f"tcp_rotvec_rad must be 3 values of norm <= pi, got {self.tcp_rotvec_rad}"
+            )
 
     def sim_uri(self) -> str:
         """The ``sim://`` URI of the cell this twin serves."""
@@ -222,6 +243,37 @@ def _pose6(p: np.ndarray, R: np.ndarray) -> list[float]:
     return [*p.tolist(), *rotvec_from_matrix(R)]
 
 
+def flange_wrenches(
+    wrench_tcp: np.ndarray,
+    R_base_tcp: np.ndarray,
+    R_flange_tcp: np.ndarray,
+    p_flange_tcp_m: np.ndarray,
+) -> tuple[list[float], list[float]]:
+    """What an e-Series reports of a wrench at its TCP: ``(actual_TCP_force, ft_raw_wrench)``.
+
+    Args:
+        wrench_tcp: ``[f, m]`` in the TCP frame, torque about the TCP origin [N, N*m].
+        R_base_tcp: the TCP's orientation in the base frame.
+        R_flange_tcp: the TCP offset's rotation (TCP axes in the flange frame).
+        p_flange_tcp_m: the TCP offset (TCP origin in the flange frame) [m].
+
+    Returns:
+        ``actual_TCP_force``: base orientation, torque about the flange origin,
+        ``[R f, R m + r x R f]`` with ``R = R_base_tcp`` and ``r = R_base_flange
+        p_flange_tcp`` (the inverse of :func:`ftcomp.hardware.ur_sensor.tcp_wrench_from_flange`);
+        ``ft_raw_wrench``: the flange frame, torque about the flange origin.
+    """
+    f_tcp, m_tcp = wrench_tcp[:3], wrench_tcp[3:]
+    f_base, m_base = R_base_tcp @ f_tcp, R_base_tcp @ m_tcp
+    lever_base = R_base_tcp @ (R_flange_tcp.T @ p_flange_tcp_m)
+    f_flange = R_flange_tcp @ f_tcp
+    m_flange = R_flange_tcp @ m_tcp + np.cross(p_flange_tcp_m, f_flange)
+    return (
+        [*f_base.tolist(), *(m_base + np.cross(lever_base, f_base)).tolist()],
+        [*f_flange.tolist(), *m_flange.tolist()],
+    )
+
+
 class _Twin:
     """The running twin: the cell, the controller, the clients."""
 
@@ -235,6 +287,10 @@ class _Twin:
         self.config = config
         self.cell = cell
         self.controller = UrController(cell, _CYCLE_S)
+        self.tcp_offset = (
+            matrix_from_rotvec(config.tcp_rotvec_rad),
+            np.array(config.tcp_offset_mm, dtype=float) * 1e-3,
+        )
         self.sessions: list[RtdeSession] = []
         self.sessions_lock = threading.Lock()
         self.packets_closed = 0
@@ -296,7 +352,7 @@ class _Twin:
             if self._last_wrench is None
             else self._last_wrench
         )
-        w_base = [*(R @ np.array(w[:3])).tolist(), *(R @ np.array(w[3:])).tolist()]
+        tcp_force, raw_wrench = flange_wrenches(np.array(w), R, *self.tcp_offset)
         runtime, robot_bits, robot_mode = ctl.status()
         q = cell.q_rad.tolist()
         qd = cell.data.qvel[:6].tolist()
@@ -310,8 +366,8 @@ class _Twin:
             "target_q": cell.q_command_rad.tolist(),
             "actual_qd": qd,
             "target_qd": qd,
-            "actual_TCP_force": w_base,
-            "ft_raw_wrench": w,
+            "actual_TCP_force": tcp_force,
+            "ft_raw_wrench": raw_wrench,
             "robot_mode": robot_mode,
             "safety_mode": ctl.safety.safety_mode,
             "safety_status": ctl.safety.safety_mode,
@@ -456,7 +512,12 @@ def serve_twin(
 
             document = truth_document(cell.true_gravity_model())
             document["mount"] = {"R_tcp_sensor": np.eye(3).tolist(), "p_tcp_sensor_m": [0, 0, 0]}
-            document["twin"] = {"robot": config.robot, "sim_uri": config.sim_uri()}
+            document["twin"] = {
+                "robot": config.robot,
+                "sim_uri": config.sim_uri(),
+                "tcp_offset_mm": list(config.tcp_offset_mm),
+                "tcp_rotvec_rad": list(config.tcp_rotvec_rad),
+            }
             atomic_write_text(config.truth_path, json.dumps(document, indent=2) + "\n")
         previous: dict[signal.Signals, Any] = {}
         if threading.current_thread() is threading.main_thread():
