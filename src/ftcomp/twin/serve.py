@@ -30,7 +30,7 @@ import socket
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -42,6 +42,7 @@ from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
 from ftcomp.hardware.registry import parse_uri
 from ftcomp.io.atomic import atomic_output, atomic_write_text
 from ftcomp.io.truth_json import truth_document
+from ftcomp.session.log import LogObserver, ObserverThread
 from ftcomp.sim.backend import MAX_LOAD_KG
 from ftcomp.sim.backend import open_robot as open_sim_robot
 from ftcomp.sim.cell import SimCell
@@ -66,7 +67,15 @@ from ftcomp.twin.ports import (
 )
 from ftcomp.twin.rtde import RtdeSession
 
-__all__ = ["FAULTS", "ROBOTS", "TwinConfig", "TwinResult", "flange_wrenches", "serve_twin"]
+__all__ = [
+    "CONTACT_LOG_COLUMNS",
+    "FAULTS",
+    "ROBOTS",
+    "TwinConfig",
+    "TwinResult",
+    "flange_wrenches",
+    "serve_twin",
+]
 
 #: Robots the twin answers as.
 ROBOTS: Final = ("ur5e",)
@@ -83,6 +92,11 @@ FAULTS: Final = {
 _CYCLE_S: Final = 0.002
 _VERSION: Final = (5, 11, 1, 108318)
 _RTDE_PORT: Final = 30004
+#: The contact log's columns (``--contact-log``): time, the surfaces' wrench on the load (base
+#: frame, torque about the TCP), the TCP pose (metres, rotation vector), the safety state.
+CONTACT_LOG_COLUMNS: Final = (
+    "t_s", "fx", "fy", "fz", "tx", "ty", "tz", "x", "y", "z", "rx", "ry", "rz", "safety",
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -237,6 +251,22 @@ def _bound(config: TwinConfig) -> Iterator[dict[str, socket.socket]]:
         for sock in ports.values():
             with contextlib.suppress(OSError):
                 sock.close()
+
+
+class _ContactRows:
+    """The loop's contact-log rows (text, as written) to the CSV file and to the observers."""
+
+    def __init__(self, writer: Any, observers: ObserverThread | None) -> None:
+        self.writer = writer
+        self.observers = observers
+
+    def writerow(self, row: list[str]) -> None:
+        if self.writer is not None:
+            self.writer.writerow(row)
+        if self.observers is not None:
+            numbers = [float(v) for v in row[:-1]]
+            numbers.append(0.0 if row[-1] == "normal" else 1.0)
+            self.observers.row(round(numbers[0] * 1e9), numbers)
 
 
 def _pose6(p: np.ndarray, R: np.ndarray) -> list[float]:
@@ -489,10 +519,17 @@ class _Twin:
 
 
 def serve_twin(
-    config: TwinConfig, on_ready: Callable[[str], None], stop: threading.Event | None = None
+    config: TwinConfig,
+    on_ready: Callable[[str], None],
+    stop: threading.Event | None = None,
+    observers: Sequence[LogObserver] = (),
 ) -> TwinResult:
     """Build the cell, bind every socket, call ``on_ready`` with the ready line, and serve
     until ``config.seconds`` pass, ``stop`` is set, or SIGTERM / SIGINT arrives.
+
+    ``observers`` (e.g. :class:`ftcomp.views.foxglove_view.TwinView`, ``--view``) see every
+    cycle's contact-log row (:data:`CONTACT_LOG_COLUMNS`, as numbers; ``safety`` 1.0 in a
+    protective stop) on a worker thread: the loop only queues it.
 
     Raises:
         ParameterError: a socket cannot be bound (busy port, address not local), or an option
@@ -527,29 +564,19 @@ def serve_twin(
             on_ready(
                 f"twin ready: robot ur://{config.robot_host} sensor netft://{config.sensor_host}"
             )
-            if config.contact_log_path is None:
-                return twin.finish(twin.run(config.seconds, stop, None))
-            with atomic_output(config.contact_log_path) as tmp, open(tmp, "w", newline="") as f:
-                log = csv.writer(f)
-                log.writerow(
-                    [
-                        "t_s",
-                        "fx",
-                        "fy",
-                        "fz",
-                        "tx",
-                        "ty",
-                        "tz",
-                        "x",
-                        "y",
-                        "z",
-                        "rx",
-                        "ry",
-                        "rz",
-                        "safety",
-                    ]
-                )
-                return twin.finish(twin.run(config.seconds, stop, log))
+            with contextlib.ExitStack() as stack:
+                writer = None
+                if config.contact_log_path is not None:
+                    tmp = stack.enter_context(atomic_output(config.contact_log_path))
+                    writer = csv.writer(stack.enter_context(open(tmp, "w", newline="")))
+                    writer.writerow(CONTACT_LOG_COLUMNS)
+                thread = None
+                if observers:
+                    thread = ObserverThread(observers)
+                    stack.callback(thread.close)
+                    thread.open(CONTACT_LOG_COLUMNS)
+                sink = _ContactRows(writer, thread) if writer or thread else None
+                return twin.finish(twin.run(config.seconds, stop, sink))
         finally:
             twin.controller.stop_program()
             if twin.netft.proc.is_alive():
