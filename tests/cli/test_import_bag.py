@@ -198,3 +198,20 @@ def test_wrench_frame_states_the_frame_a_driver_did_not_put_in_the_header(
     cal = tmp_path / "cal.json"
     assert main(["calibrate", str(samples), "-o", str(cal)]) == 0
     _assert_truth_within_3_standard_errors(cal)
+
+
+@pytest.mark.parametrize("route", ["tf", "urdf"])
+def test_import_bag_reports_its_progress_up_to_every_message_it_reads(
+    route: str, bags: dict[str, Path]
+) -> None:
+    from ftcomp.ros2.importer import import_bag
+
+    calls: list[tuple[int, int]] = []
+    urdf = {"urdf": bags["urdf"], "joint_states_topic": "/joint_states"} if route == "urdf" else {}
+    import_bag(
+        bags["mcap"], wrench_topic=WRENCH_TOPIC, base_frame="base", sensor_frame="ft_sensor",
+        progress=lambda done, total: calls.append((done, total)), **urdf,  # type: ignore[arg-type]
+    )  # fmt: skip
+    done = [d for d, _ in calls]
+    assert len(calls) > 2 and done == sorted(done)
+    assert len({t for _, t in calls}) == 1 and calls[-1][0] == calls[-1][1]  # all of it read

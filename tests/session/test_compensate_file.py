@@ -141,3 +141,21 @@ def test_a_bias_drift_needs_time_stamps_and_is_reported_when_extrapolated(
 def test_the_config_refuses_a_bad_value_naming_it(field: str, value: float) -> None:
     with pytest.raises(ParameterError, match=field):
         CompensateConfig(**{field: value})  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_compensate_reports_its_progress_up_to_the_whole_input(
+    suffix: str, tmp_path: Path, rng: np.random.Generator, calibration: Calibration
+) -> None:
+    src, out = tmp_path / "rec.csv", tmp_path / f"out{suffix}"
+    write_recording(src, rng, 3000)
+    if suffix == ".parquet":  # a Parquet input: progress in rows
+        pq.write_table(pcsv.read_csv(src), tmp_path / "rec.parquet")
+        src = tmp_path / "rec.parquet"
+    config = CompensateConfig(csv_chunk_bytes=16384, parquet_batch_rows=500)
+    calls: list[tuple[int, int]] = []
+    compensate_file(src, out, calibration, config, lambda d, t: calls.append((d, t)))
+    done = [d for d, _ in calls]
+    assert len(calls) > 3 and done == sorted(done)
+    whole = 3000 if suffix == ".parquet" else src.stat().st_size
+    assert {t for _, t in calls} == {whole} and done[-1] == whole

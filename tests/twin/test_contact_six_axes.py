@@ -3,6 +3,9 @@ force, and the cause of the lateral force a grasped load shows on the sponge."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
+
 import numpy as np
 import pytest
 
@@ -27,11 +30,18 @@ def test_the_verdict_reports_the_lateral_force_and_keeps_its_judgement() -> None
     assert judge_placement("placed", WEIGHT_N, 0.0, WEIGHT_N, 0.25).true_lateral_N is None
 
 
-def _set_down(friction: float) -> tuple[np.ndarray, np.ndarray]:
+def _set_down(friction: float, shear: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Lower the held load straight down (world z) until the sponge carries it; the contact
-    wrench (base frame) and the TCP's measured-minus-commanded position [m]."""
+    wrench (base frame) and the TCP's measured-minus-commanded position [m]. Without shear the
+    sponge is a plate on a vertical slide only, rigid across (the cell before the fix)."""
     cell = open_robot(parse_uri(PLACE))
     assert isinstance(cell, SimCell)
+    if not shear:
+        sponge = dataclasses.replace(cell.config.sponge, shear_stiffness_N_per_m=math.inf)
+        cell = SimCell(dataclasses.replace(cell.config, sponge=sponge), seed=4)
+        cell.hold_above_surface(0.02, 0.5)  # as sim://...&clearance_mm=2 sets it up
+        cell.grasp()
+        cell.hold_above_surface(0.002, 0.3)
     m = cell.model
     for name in ("load_geom", "sponge_top"):
         m.geom_friction[m.geom(name).id, 0] = friction
@@ -47,9 +57,9 @@ def _set_down(friction: float) -> tuple[np.ndarray, np.ndarray]:
     return cell.true_contact_wrench_base(p), p - commanded
 
 
-def test_the_lateral_force_on_the_sponge_is_the_servo_springback_held_by_friction() -> None:
-    sticking, sag = _set_down(friction=1.0)
-    sliding, relaxed = _set_down(friction=0.0)
+def test_on_a_sponge_rigid_across_the_servo_springback_is_held_by_friction() -> None:
+    sticking, sag = _set_down(friction=1.0, shear=False)
+    sliding, relaxed = _set_down(friction=0.0, shear=False)
     assert sticking[2] == pytest.approx(WEIGHT_N, abs=0.1)
     assert abs(sticking[0]) > 1.0  # about -1.7 N across the surface
     # Without friction nothing holds the arm: it springs back to its command, no lateral force.
@@ -58,3 +68,10 @@ def test_the_lateral_force_on_the_sponge_is_the_servo_springback_held_by_frictio
     # With friction the arm stays where the load's weight had sagged it, across the surface.
     assert sag[0] < -1e-5
     assert np.sign(sticking[0]) == np.sign(sag[0])
+
+
+def test_a_sponge_that_shears_takes_the_springback_with_almost_no_lateral_force() -> None:
+    sticking, _ = _set_down(friction=1.0)
+    assert sticking[2] == pytest.approx(WEIGHT_N, abs=0.1)
+    # The pad shears with the arm's ~25 um springback: 600 N/m * 25 um = 0.015 N.
+    assert np.linalg.norm(sticking[:2]) < 0.05

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -69,16 +70,16 @@ def test_record_then_calibrate_recovers_the_twins_truth_within_3_standard_errors
         assert np.all(np.abs(error) <= 3.0 * se), (key, error, se)
 
 
-BOOK_PRESSES = pytest.mark.xfail(
-    reason="on the stiff book the loop's latency through the twin (RTDE, the speedL ramp, the "
-    "sensor's UDP stream: 3 to 4 cycles) turns the approach at K2 * weight into a press of "
-    "50-140 N (force limit, or the twin's protective stop); sim:// has no such latency. "
-    "Open: docs/twin.md",
-    strict=False,
-)
+#: The paper's gains per surface (``ftcomp sim place``'s defaults): on the stiff book K1 = 0 and
+#: K2 = 0.1 mm/(s*N). With the sponge's (K1 0.1 mm/N, K2 1) the force loop's time constant on
+#: the book, 1 / (K2 * stiffness) with ~1.4e5 N/m from command to force, is 7 ms: shorter than
+#: the loop's round trip through the twin (3-4 cycles), so it rings and presses 50-140 N (and
+#: on sim:// it does not settle in 30 s either).
+GAINS = {"sponge": ("--k1", "0.1", "--k2", "1"), "book": ("--k1", "0", "--k2", "0.1")}
+ERROR = re.compile(r"mean force error over the last 0\.3 s \[(\S+) (\S+) (\S+)\]")
 
 
-@pytest.mark.parametrize("surface", ["sponge", pytest.param("book", marks=BOOK_PRESSES)])
+@pytest.mark.parametrize("surface", ["sponge", "book"])
 def test_run_sets_a_half_kilogram_load_down_gently(
     calibrated: tuple[Path, Path], surface: str, tmp_path: Path
 ) -> None:
@@ -89,7 +90,7 @@ def test_run_sets_a_half_kilogram_load_down_gently(
         done = _ftcomp(
             "run", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri,
             "-c", str(calibration), "--control", "admittance", "--axes", "z",
-            "--k1", "0.1", "--k2", "1", "--settle-band-N", "0.05", "--seconds", "30",
+            *GAINS[surface], "--settle-band-N", "0.05", "--seconds", "30",
             "--max-late-cycles", "50",  # a shared CI host: the client process is not real-time
             "-o", str(log),
         )  # fmt: skip
@@ -101,3 +102,10 @@ def test_run_sets_a_half_kilogram_load_down_gently(
     assert fz.max() <= LOAD_WEIGHT_N + 0.3  # never pressed in beyond the weight
     assert fz[-1] == pytest.approx(LOAD_WEIGHT_N, abs=0.05)  # the surface carries it all
     assert all(r["safety"] == "normal" for r in rows)
+    # The lateral contact (on the book the arm's servo springback held by friction, about 2 N;
+    # on the sponge, which shears, almost none) is the lateral force the run reports at its end.
+    found = ERROR.search(done.stdout)
+    assert found is not None, done.stdout
+    reported = np.array([float(found[1]), float(found[2])])
+    lateral = np.array([float(rows[-1]["fx"]), float(rows[-1]["fy"])])
+    assert np.all(np.abs(lateral - reported) <= 0.25), (lateral, reported)

@@ -30,3 +30,17 @@ def test_the_bar_is_silent_in_a_pipe() -> None:
     bar.advance()
     bar.close()
     assert pipe.getvalue() == "" and not bar.enabled
+
+
+def test_a_callback_bar_shows_megabytes_read_on_a_terminal_and_nothing_in_a_pipe() -> None:
+    from ftcomp.cli.live_status import CallbackProgress
+
+    screen, pipe = _Terminal(), io.StringIO()
+    for stream in (screen, pipe):
+        bar = CallbackProgress("MB read", 1e6, stream=stream)
+        bar(1_500_000, 4_000_000)
+        bar(4_000_000, 4_000_000)
+        bar.close()
+        bar.close()  # idempotent
+    assert "MB read" in screen.getvalue() and "4/4" in screen.getvalue()
+    assert pipe.getvalue() == ""

@@ -1,6 +1,6 @@
 """``ftcomp compensate SAMPLES.csv -c calibration.json -o out.csv``: parses, calls
 :func:`ftcomp.session.compensate_file.compensate_file` (streaming, CSV or Parquet, the output
-only when complete), prints a summary.
+only when complete), prints a summary; a progress bar on a terminal (silent when piped).
 """
 
 from __future__ import annotations
@@ -9,6 +9,7 @@ import argparse
 import json
 
 from ftcomp.cli.common import add_range_argument, print_warnings
+from ftcomp.cli.live_status import CallbackProgress
 from ftcomp.session.compensate_file import EXTRA_COLUMNS
 
 __all__ = ["register", "run"]
@@ -65,7 +66,12 @@ def run(args: argparse.Namespace) -> int:
     config = CompensateConfig(
         force_range_N=force_range, torque_range_Nm=torque_range, overwrite=args.force
     )
-    result = compensate_file(args.samples, args.output, args.calibration, config)
+    parquet = str(args.samples).lower().endswith(".parquet")
+    bar = CallbackProgress("rows read" if parquet else "MB read", 1.0 if parquet else 1e6)
+    try:
+        result = compensate_file(args.samples, args.output, args.calibration, config, bar)
+    finally:
+        bar.close()
     print_warnings(result.warnings)
     if args.json:
         summary = {

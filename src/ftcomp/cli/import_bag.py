@@ -61,21 +61,27 @@ def run(args: argparse.Namespace) -> int:
     """Import, print the segments, write the sample CSV."""
     from ftcomp.cli.calibrate import console
     from ftcomp.cli.common import print_warnings
+    from ftcomp.cli.live_status import CallbackProgress
     from ftcomp.io.atomic import check_writable
     from ftcomp.ros2.importer import import_bag, write_bag_samples
 
     output = check_writable(args.output, overwrite=args.force)
     still = still_config(args)
-    result = import_bag(
-        args.bag,
-        wrench_topic=args.wrench_topic,
-        base_frame=args.base_frame,
-        sensor_frame=args.sensor_frame,
-        still=still,
-        urdf=args.urdf,
-        joint_states_topic=args.joint_states,
-        wrench_frame=args.wrench_frame,
-    )
+    bar = CallbackProgress("messages read")
+    try:
+        result = import_bag(
+            args.bag,
+            wrench_topic=args.wrench_topic,
+            base_frame=args.base_frame,
+            sensor_frame=args.sensor_frame,
+            still=still,
+            urdf=args.urdf,
+            joint_states_topic=args.joint_states,
+            wrench_frame=args.wrench_frame,
+            progress=bar,
+        )
+    finally:
+        bar.close()
     print_warnings(result.warnings)
     out = console()
     out.print(f"pose: {result.pose_source}")

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, TextIO
 if TYPE_CHECKING:
     from ftcomp.session.stream import StreamProgress
 
-__all__ = ["PoseProgress", "StatusLine", "add_view_arguments", "view_address"]
+__all__ = ["CallbackProgress", "PoseProgress", "StatusLine", "add_view_arguments", "view_address"]
 
 #: The live view's address when ``--view`` names only a port (loopback: nothing outside the
 #: machine sees it unless asked).
@@ -149,3 +149,34 @@ class PoseProgress:
         if self._progress is not None:
             self._progress.stop()
             self._progress = None
+
+
+class CallbackProgress:
+    """A :class:`PoseProgress` fed by a library call's ``progress(done, total)`` callback
+    (``compensate``: bytes or rows read; ``import-bag``: messages read), drawn from the first
+    call on; silent where :class:`PoseProgress` is.
+
+    Args:
+        description: what is counted, e.g. ``"MB read"``.
+        scale: the callback's units per unit shown (1e6 to show bytes as MB).
+        stream: where to draw (stderr).
+    """
+
+    def __init__(self, description: str, scale: float = 1.0, stream: TextIO | None = None):
+        self.description, self.scale, self.stream = description, scale, stream
+        self.bar: PoseProgress | None = None
+        self.shown = 0
+
+    def __call__(self, done: int, total: int) -> None:
+        """The work is ``done`` of ``total`` (the callback's units)."""
+        if self.bar is None:
+            self.bar = PoseProgress(self.description, math.ceil(total / self.scale), self.stream)
+        now = math.ceil(done / self.scale)
+        if now > self.shown:
+            self.bar.advance(now - self.shown)
+            self.shown = now
+
+    def close(self) -> None:
+        """Remove the bar (idempotent)."""
+        if self.bar is not None:
+            self.bar.close()

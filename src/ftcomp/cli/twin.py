@@ -2,13 +2,16 @@
 
 ``ftcomp twin --robot-host 127.0.0.N --sensor-host 127.0.0.M [--seconds S] [--load-kg X
 --surface sponge|book|none --clearance-mm C] [--tilt-deg U,V] [--truth truth.json]
-[--contact-log contact.csv] [--fault NAME --fault-at-s T]``
+[--contact-log contact.csv] [--fault NAME --fault-at-s T] [--tcp-offset-mm X,Y,Z
+--tcp-rotvec-rad RX,RY,RZ] [--view HOST:PORT]``
 
 The robot answers RTDE (30004, 500 Hz), the dashboard (29999) and the script ports
 (30001-30003) on the robot host, as ``ur_rtde``'s ``RTDEControlInterface`` and
 ``RTDEReceiveInterface`` need them; the Net F/T answers HTTP (netftapi2.xml) and RDT over UDP
 49152 on the sensor host. Nothing else is bound. Prints ``twin ready: ...`` once every socket
 is bound, serves until ``--seconds`` pass or SIGTERM / Ctrl-C, then a line of what it served.
+``--view HOST:PORT`` serves the contact wrench, the TCP pose and the safety state live to
+Foxglove or Lichtblick (docs/views.md).
 See docs/twin.md for a first session rehearsed against it.
 """
 
@@ -17,6 +20,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ftcomp.cli.live_status import view_address
 from ftcomp.errors import ParameterError
 
 __all__ = ["register", "run"]
@@ -88,6 +92,24 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="when, after the first RTDE stream starts [s] (default 1)",
     )
     parser.add_argument(
+        "--tcp-offset-mm",
+        default="0,0,0",
+        help="the controller's TCP offset X,Y,Z [mm]: the flange sits this far behind the "
+        "sensor frame (the TCP); actual_TCP_force is at the flange (default 0,0,0)",
+    )
+    parser.add_argument(
+        "--tcp-rotvec-rad",
+        default="0,0,0",
+        help="the TCP offset's rotation RX,RY,RZ [rad] (default 0,0,0)",
+    )
+    parser.add_argument(
+        "--view",
+        type=view_address,
+        metavar="HOST:PORT",
+        help="serve the contact wrench, TCP pose and safety state over the Foxglove WebSocket "
+        "protocol (PORT alone: on 127.0.0.1; default: no view)",
+    )
+    parser.add_argument(
         "--no-realtime",
         action="store_true",
         help="do not ask for real-time priority (default: SCHED_FIFO where allowed)",
@@ -101,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
 
     tilt = _floats(args.tilt_deg, 2, "--tilt-deg")
     drift = _floats(args.drift_N_per_min, 3, "--drift-N-per-min")
+    offset = _floats(args.tcp_offset_mm, 3, "--tcp-offset-mm")
+    rotvec = _floats(args.tcp_rotvec_rad, 3, "--tcp-rotvec-rad")
     config = TwinConfig(
         robot_host=args.robot_host,
         sensor_host=args.sensor_host,
@@ -118,8 +142,19 @@ def run(args: argparse.Namespace) -> int:
         fault=args.fault,
         fault_at_s=args.fault_at_s,
         realtime=not args.no_realtime,
+        tcp_offset_mm=(offset[0], offset[1], offset[2]),
+        tcp_rotvec_rad=(rotvec[0], rotvec[1], rotvec[2]),
     )
-    result = serve_twin(config, lambda line: print(line, flush=True))
+    observers = []
+    if args.view:
+        from ftcomp.views.foxglove_view import TwinView
+
+        observers.append(TwinView(args.view))
+    try:
+        result = serve_twin(config, lambda line: print(line, flush=True), observers=observers)
+    finally:
+        for view in observers:
+            view.close()
     print(
         f"twin served {result.cycles} cycles ({result.late_cycles} late), "
         f"{result.rtde_packets} RTDE packages, {result.rdt_records} RDT records; "

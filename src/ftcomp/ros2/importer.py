@@ -18,18 +18,22 @@ publishes sensor-frame readings stamped ``base_link`` by default, some leave it 
 from __future__ import annotations
 
 import os
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
+from rosbags.interfaces import Connection
+from rosbags.typesys.store import Typestore
 from scipy.spatial.transform import Rotation
 
 from ftcomp.calibration.still import Segment, StillConfig, find_still_segments, segment_rows
 from ftcomp.errors import InputFileError, ParameterError
 from ftcomp.frames import ENCODING_COLUMNS, encode_orientation
 from ftcomp.io.tables import write_table
-from ftcomp.ros2.bag import open_bag, read_joint_states, read_transforms, read_wrenches
+from ftcomp.ros2.bag import Bag, open_bag, read_joint_states, read_transforms, read_wrenches
 from ftcomp.ros2.tf import TransformTree
 from ftcomp.ros2.urdf import UrdfChain
 from ftcomp.samples import WRENCH_COLUMNS, Samples
@@ -129,6 +133,31 @@ def _fixed_pose(
     return T[:3, 3], Rotation.from_matrix(T[:3, :3])
 
 
+#: Messages between two calls of :func:`import_bag`'s ``progress``.
+_PROGRESS_EVERY = 2000
+
+
+class _CountingBag:
+    """A :class:`~ftcomp.ros2.bag.Bag` that tells ``progress`` how many of the messages it
+    will read (``total``) it has read."""
+
+    def __init__(self, bag: Bag, total: int, progress: Callable[[int, int], None]) -> None:
+        self.bag, self.total, self.progress = bag, total, progress
+        self.source, self.connections, self.warnings = bag.source, bag.connections, bag.warnings
+        self.done = 0
+
+    def typestore(self, conn: Connection) -> Typestore:
+        return self.bag.typestore(conn)
+
+    def messages(self, conns: list[Connection]) -> Iterator[tuple[int, Any]]:
+        for item in self.bag.messages(conns):
+            self.done += 1
+            if self.done % _PROGRESS_EVERY == 0:
+                self.progress(self.done, self.total)
+            yield item
+        self.progress(self.done, self.total)
+
+
 def import_bag(
     path: str | os.PathLike[str],
     *,
@@ -139,6 +168,7 @@ def import_bag(
     urdf: str | os.PathLike[str] | None = None,
     joint_states_topic: str | None = None,
     wrench_frame: str | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> BagImport:
     """Read a bag and keep the readings of its still segments (see the module docstring).
 
@@ -153,6 +183,9 @@ def import_bag(
         joint_states_topic: the ``sensor_msgs/msg/JointState`` topic (with ``urdf``).
         wrench_frame: the frame the readings are in, whatever their ``header.frame_id`` says
             (default: the header's).
+        progress: called every few thousand messages with ``(read, total)``: the messages
+            read so far of the topics the import reads (wrench, tf, joint states) and their
+            count in the bag (e.g. for a progress bar; default: none).
 
     Raises:
         InputFileError: an unreadable bag, a missing topic or frame, a wrench in an unexpected
@@ -165,7 +198,15 @@ def import_bag(
     source = str(path)
     urdf_path = Path(urdf) if urdf is not None else None
     tree: TransformTree | None = None
-    with open_bag(path) as reader:
+    with open_bag(path) as bag:
+        reader = bag
+        if progress is not None:
+            poses = ("/tf", "/tf_static") if urdf_path is None else (joint_states_topic,)
+            topics = {wrench_topic, *poses}
+            total = sum(c.msgcount for c in bag.connections if c.topic in topics)
+            # Read through the counting wrapper: it has every attribute of a Bag that the
+            # readers use (source, connections, warnings, typestore, messages).
+            reader = cast(Bag, _CountingBag(bag, total, progress))
         series = read_wrenches(reader, wrench_topic, source, wrench_frame)
         if urdf_path is None:
             tree = read_transforms(reader, source)

@@ -187,8 +187,10 @@ def _write(
     compensator: GravityCompensator,
     output: Path,
     to_parquet: bool,
+    progress: Callable[[int], None],
 ) -> _Totals:
-    """Compensate every block of ``reader`` into ``output``, atomically."""
+    """Compensate every block of ``reader`` into ``output``, atomically; ``progress`` is told
+    how far the input has been read after each block (bytes of a CSV, rows of Parquet)."""
     totals = _Totals()
     with atomic_output(output) as tmp, tmp.open("wb") as handle:
         if to_parquet:
@@ -203,6 +205,7 @@ def _write(
                     for j, name in enumerate(EXTRA_COLUMNS):
                         table = table.append_column(name, pa.array(extra[:, j]))
                     writer.write(table)
+                    progress(totals.rows)
         else:
             header = io.StringIO()
             csv.writer(header, lineterminator="\n").writerow(
@@ -211,6 +214,7 @@ def _write(
             handle.write(header.getvalue().encode("utf-8"))
             for block in read_ahead(reader.blocks()):
                 _csv_block(handle, block, _extra(block, compensator, totals))
+                progress(block.byte_range[1] if block.byte_range else totals.rows)
     return totals
 
 
@@ -235,11 +239,22 @@ def _open(
     )
 
 
+def _input_size(path: Path) -> int:
+    """How far a whole read goes, in :func:`compensate_file`'s progress units: the rows of a
+    Parquet file (from its footer), the bytes of a CSV."""
+    if path.suffix.lower() == ".parquet":
+        import pyarrow.parquet as pq
+
+        return int(pq.ParquetFile(path).metadata.num_rows)
+    return path.stat().st_size
+
+
 def compensate_file(
     samples: PathLike,
     output: PathLike,
     calibration: Calibration | PathLike,
     config: CompensateConfig | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> CompensateResult:
     """Remove sensor bias and tool gravity from every reading of ``samples`` into ``output``.
 
@@ -253,6 +268,9 @@ def compensate_file(
         calibration: the calibration, or its file (``ftcomp calibrate``'s JSON).
         config: ranges, block sizes and the overwrite policy (defaults: no range check,
             the readers' block sizes, never replace a file).
+        progress: called after each block with ``(done, total)``: how far the input has been
+            read and its whole size, in bytes of a CSV or rows of a Parquet file (e.g. for a
+            progress bar; default: none).
 
     Returns:
         The :class:`CompensateResult` (rows, time, means, warnings).
@@ -289,7 +307,13 @@ def compensate_file(
                 f"{reader.source}: the calibration has a {drift.name} bias drift, applied from "
                 "each row's time: the file has no 't' (or 't_ns') column"
             )
-        totals = _write(reader, GravityCompensator(calibration), out, to_parquet)
+        size = _input_size(source) if progress is not None else 0
+
+        def done(n: int) -> None:
+            if progress is not None:
+                progress(n, size)
+
+        totals = _write(reader, GravityCompensator(calibration), out, to_parquet, done)
     warnings = list(reader.warnings)
     t_range = (totals.t_min, totals.t_max) if drift is not None and totals.rows else None
     if drift is not None and (totals.t_min < drift.t_min_s or totals.t_max > drift.t_max_s):

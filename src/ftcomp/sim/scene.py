@@ -257,6 +257,13 @@ def _surface_xml(config: SceneConfig) -> str:
         sx, sy = s.half_size_xy_m
         plate_z = top + s.thickness_m - plate_half
         plate_inertia = _box_inertia(s.plate_mass_kg, np.array([sx, sy, plate_half]))
+        shear = "".join(
+            f"""
+      <joint name="sponge_shear_{axis}" type="slide" axis="{direction}" range="-0.005 0.005"
+             stiffness="{s.shear_stiffness_N_per_m:.12g}" damping="{s.damping_N_s_per_m:.12g}"/>"""
+            for axis, direction in (("x", "1 0 0"), ("y", "0 1 0"))
+            if math.isfinite(s.shear_stiffness_N_per_m)
+        )
         xml += f"""
     <geom name="sponge_pad" type="box" pos="{cx:.6g} {cy:.6g} {top + s.thickness_m / 2:.6g}"
           size="{sx:.6g} {sy:.6g} {s.thickness_m / 2:.6g}" contype="0" conaffinity="0"
@@ -264,7 +271,7 @@ def _surface_xml(config: SceneConfig) -> str:
     <body name="sponge_plate" pos="{cx:.6g} {cy:.6g} {plate_z:.6g}" gravcomp="1">
       <joint name="sponge_slide" type="slide" axis="0 0 1"
              range="{-0.9 * s.thickness_m:.6g} 0.001"
-             stiffness="{s.stiffness_N_per_m:.12g}" damping="{s.damping_N_s_per_m:.12g}"/>
+             stiffness="{s.stiffness_N_per_m:.12g}" damping="{s.damping_N_s_per_m:.12g}"/>{shear}
       <inertial pos="0 0 0" mass="{s.plate_mass_kg:.12g}" diaginertia="{_f(plate_inertia)}"/>
       <geom name="sponge_top" type="box" size="{sx:.6g} {sy:.6g} {plate_half:.6g}"
             rgba="0.95 0.85 0.2 1" {surf}/>

@@ -2,8 +2,10 @@
 
 The sponge is a rigid plate on a vertical slide joint with a linear spring and damper, so its
 stiffness and damping are physical values [N/m], [N*s/m] (MuJoCo's negative ``solref`` is not in
-N/m). The plate's own weight is cancelled (``gravcomp``), so at rest the contact force the sponge
-pushes on the object is exactly ``stiffness_N_per_m * compression_m`` (its *spring law*). The book
+N/m); two horizontal slides with the pad's shear stiffness let it shear as a foam pad does (a
+load that sticks to it and moves sideways is not held rigidly). The plate's own weight is
+cancelled (``gravcomp``), so at rest the contact force the sponge pushes on the object is
+exactly ``stiffness_N_per_m * compression_m`` (its *spring law*). The book
 is a fixed box with a stiff contact (MuJoCo time constant 8 ms: the stiffest that does not chatter
 against the stiff position-servoed arm at the 1 ms step).
 """
@@ -64,6 +66,10 @@ class SpongeSpec:
         thickness_m: pad thickness [m]; the plate bottoms out at 90 % of it.
         half_size_xy_m: half extents of the pad [m].
         plate_mass_kg: mass of the moving plate [kg] (its weight is compensated).
+        shear_stiffness_N_per_m: the pad's stiffness across its top, x and y [N/m] (a foam's
+            shear modulus is about 0.4 of its Young's modulus: 0.4 of the compression
+            stiffness for the same pad); ``math.inf``: rigid across (a plate on a vertical
+            slide only, the cell before the shear).
     """
 
     stiffness_N_per_m: float = 1500.0
@@ -71,6 +77,7 @@ class SpongeSpec:
     thickness_m: float = 0.03
     half_size_xy_m: tuple[float, float] = (0.08, 0.08)
     plate_mass_kg: float = 0.02
+    shear_stiffness_N_per_m: float = 600.0
 
     def __post_init__(self) -> None:
         _check_positive(
@@ -81,6 +88,11 @@ class SpongeSpec:
             half_x=self.half_size_xy_m[0],
             half_y=self.half_size_xy_m[1],
         )
+        if math.isnan(self.shear_stiffness_N_per_m) or self.shear_stiffness_N_per_m <= 0.0:
+            raise ParameterError(
+                "SpongeSpec.shear_stiffness_N_per_m must be > 0 (inf: rigid across), "
+                f"got {self.shear_stiffness_N_per_m}"
+            )
         if not math.isfinite(self.damping_N_s_per_m) or self.damping_N_s_per_m < 0.0:
             raise ParameterError(
                 f"SpongeSpec.damping_N_s_per_m must be finite and >= 0, "

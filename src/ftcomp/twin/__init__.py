@@ -19,6 +19,7 @@ __all__ = [
     "TwinConfig",
     "TwinResult",
     "UrController",
+    "flange_wrenches",
     "serve_twin",
 ]
 
@@ -30,6 +31,7 @@ _WHERE = {
     "TwinConfig": "ftcomp.twin.serve",
     "TwinResult": "ftcomp.twin.serve",
     "UrController": "ftcomp.twin.controller",
+    "flange_wrenches": "ftcomp.twin.serve",
     "serve_twin": "ftcomp.twin.serve",
 }
 

@@ -11,7 +11,9 @@ counts, big-endian. ``rdt_sequence`` numbers the records of one request from 1,
 The cell's loop (:mod:`ftcomp.twin.serve`) hands the wrist sensor's samples to
 :class:`NetFtProcess` every cycle; the process sends them one record each, evenly spaced at
 the sensor's rate, from its own interpreter, so the records keep their period however busy the
-physics and the RTDE clients keep the cell's process.
+physics and the RTDE clients keep the cell's process: each at the time the cell made it plus
+:data:`_DELAY_S` (a jitter buffer for the cell's stalls), a sample later than
+:data:`_MAX_LATE_S` past its time dropped (never a backlog).
 """
 
 from __future__ import annotations
@@ -56,6 +58,11 @@ SERIOUS_STATUS: Final = 0x80020000
 _RECORD: Final = struct.Struct(">III6i")
 _REQUEST: Final = struct.Struct(">HHI")
 _STOP, _START, _BUFFERED, _BIAS = 0x0000, 0x0002, 0x0003, 0x0042
+#: Each sample is sent this long after the cell made it [s]: a jitter buffer that hides a
+#: stall of the cell's loop shorter than it (a real Net F/T has no stalls to hide).
+_DELAY_S: Final = 0.003
+#: A sample later than this past its time is dropped, not sent [s].
+_MAX_LATE_S: Final = 0.010
 
 
 def configuration_page(
@@ -116,7 +123,7 @@ class NetFtServer:
         self.rate_hz = rate_hz
         self.lock = threading.Lock()
         self.ready = threading.Condition()
-        self.queue: list[tuple[list[int], int]] = []
+        self.queue: list[tuple[list[int], int, float]] = []
         self.closed = False
         self.peer: tuple[str, int] | None = None
         self.remaining = 0  # records left of a finite request (0: without end)
@@ -157,38 +164,53 @@ class NetFtServer:
                 elif command == _BIAS:
                     self.bias_requested = True
 
-    def push(self, counts: Sequence[Sequence[int]], status: int = 0) -> None:
-        """Queue the new sensor samples (counts, before the software bias): the sender thread
-        sends them one record each, evenly spaced at the sensor's rate, as the device does
-        (not in bursts of a physics cycle)."""
+    def push(
+        self, counts: Sequence[Sequence[int]], status: int = 0, made_at: float | None = None
+    ) -> None:
+        """Queue the new sensor samples (counts, before the software bias), the newest made
+        at ``made_at`` (host monotonic clock [s]; default now), the others one sensor period
+        apart before it. The sender thread sends each one record at its time plus
+        :data:`_DELAY_S`, so evenly spaced at the sensor's rate as the device does (not in
+        bursts of a physics cycle)."""
+        period = 1.0 / self.rate_hz
+        newest = time.monotonic() if made_at is None else made_at
+        n = len(counts)
         with self.ready:
-            self.queue.extend((list(c), status) for c in counts)
+            self.queue.extend(
+                (list(c), status, newest - (n - 1 - i) * period + _DELAY_S)
+                for i, c in enumerate(counts)
+            )
             self.ready.notify()
 
     def _sender(self) -> None:
         if self.realtime:
             realtime_priority(RT_PRIORITY + 1)
-        period = 1.0 / self.rate_hz
-        due = time.monotonic()
         while not self.closed:
             with self.ready:
                 while not self.queue and not self.closed:
                     self.ready.wait(0.1)
                 if self.closed:
                     return
-                sample, status = self.queue.pop(0)
-                if len(self.queue) > 8:  # far behind: drop the backlog's pacing
-                    due = time.monotonic()
-            self._send_sample(sample, status)
-            due = max(due + period, time.monotonic() - 4 * period)
+                # A sample more than _MAX_LATE_S past its time (the cell or this sender was
+                # held back) is not sent: a real Net F/T sends the sample it has now, never a
+                # backlog. Sending every queued sample at the rate kept each later record as
+                # late (0.8 s seen on a loaded host: run pressed the book with 59 N).
+                now = time.monotonic()
+                skipped = 0
+                while len(self.queue) > 1 and now - self.queue[0][2] > _MAX_LATE_S:
+                    del self.queue[0]
+                    skipped += 1
+                sample, status, due = self.queue.pop(0)
             wait = due - time.monotonic()
             if wait > 0:
                 time.sleep(wait)
+            self._send_sample(sample, status, skipped)
 
-    def _send_sample(self, sample: list[int], status: int) -> None:
-        """One record to the streaming client (with the bias, losses and freezes applied)."""
+    def _send_sample(self, sample: list[int], status: int, skipped: int = 0) -> None:
+        """One record to the streaming client (with the bias, losses and freezes applied);
+        ``skipped`` samples were dropped before it (``ft_sequence`` counts them)."""
         with self.lock:
-            self.ft_sequence += 1
+            self.ft_sequence += 1 + skipped
             if self.frozen is None:
                 self.last = list(sample)
             if self.bias_requested:
@@ -303,8 +325,8 @@ def _child(host: str, rate_hz: float, realtime: bool, conn: Connection) -> None:
         while True:
             kind, payload = conn.recv()
             if kind == "samples":
-                counts, status = payload
-                server.push(counts, status)
+                counts, status, made_at = payload
+                server.push(counts, status, made_at)
             elif kind == "fault":
                 server.inject(payload)
             elif kind == "stop":
@@ -348,9 +370,9 @@ class NetFtProcess:
         self.sent = 0
 
     def push(self, counts: Sequence[Sequence[int]], status: int) -> None:
-        """Hand the cycle's new samples (counts, before bias) to the sensor."""
+        """Hand the cycle's new samples (counts, before bias), made now, to the sensor."""
         if counts:
-            self.conn.send(("samples", ([list(c) for c in counts], status)))
+            self.conn.send(("samples", ([list(c) for c in counts], status, time.monotonic())))
 
     def inject(self, fault: str) -> None:
         """A sensor fault from now on: ``sensor-frozen`` or ``rdt-loss``."""

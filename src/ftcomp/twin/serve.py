@@ -31,7 +31,7 @@ import socket
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Final
@@ -40,10 +40,11 @@ import numpy as np
 
 from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import ParameterError
-from ftcomp.frames import rotvec_from_matrix
+from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
 from ftcomp.hardware.registry import parse_uri
 from ftcomp.io.atomic import atomic_output, atomic_write_text
 from ftcomp.io.truth_json import truth_document
+from ftcomp.session.log import LogObserver, ObserverThread
 from ftcomp.sim.backend import MAX_LOAD_KG
 from ftcomp.sim.backend import open_robot as open_sim_robot
 from ftcomp.sim.cell import SimCell
@@ -68,7 +69,15 @@ from ftcomp.twin.ports import (
 )
 from ftcomp.twin.rtde import RtdeSession
 
-__all__ = ["FAULTS", "ROBOTS", "TwinConfig", "TwinResult", "serve_twin"]
+__all__ = [
+    "CONTACT_LOG_COLUMNS",
+    "FAULTS",
+    "ROBOTS",
+    "TwinConfig",
+    "TwinResult",
+    "flange_wrenches",
+    "serve_twin",
+]
 
 #: Robots the twin answers as.
 ROBOTS: Final = ("ur5e",)
@@ -85,6 +94,11 @@ FAULTS: Final = {
 _CYCLE_S: Final = 0.002
 _VERSION: Final = (5, 11, 1, 108318)
 _RTDE_PORT: Final = 30004
+#: The contact log's columns (``--contact-log``): time, the surfaces' wrench on the load (base
+#: frame, torque about the TCP), the TCP pose (metres, rotation vector), the safety state.
+CONTACT_LOG_COLUMNS: Final = (
+    "t_s", "fx", "fy", "fz", "tx", "ty", "tz", "x", "y", "z", "rx", "ry", "rz", "safety",
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -108,6 +122,12 @@ class TwinConfig:
         fault: a fault of :data:`FAULTS` to inject, or None.
         fault_at_s: when, after the first RTDE client started streaming [s].
         realtime: ask for SCHED_FIFO for the loop and the Net F/T's sender (as ur_rtde does).
+        tcp_offset_mm: the controller's TCP offset, the TCP origin in the flange frame [mm]
+            (PolyScope's Installation > TCP). The TCP is the wrist sensor's frame, so the
+            flange sits behind it by this offset; ``actual_TCP_force`` is reported about that
+            flange origin and ``ft_raw_wrench`` in that flange frame, as an e-Series does.
+        tcp_rotvec_rad: the TCP offset's rotation (TCP axes in the flange frame), a rotation
+            vector [rad].
     """
 
     robot_host: str
@@ -126,6 +146,8 @@ class TwinConfig:
     fault: str | None = None
     fault_at_s: float = 1.0
     realtime: bool = True
+    tcp_offset_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    tcp_rotvec_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         for name in ("robot_host", "sensor_host"):
@@ -162,6 +184,19 @@ class TwinConfig:
             raise ParameterError(f"seed must be >= 0, got {self.seed}")
         if not (math.isfinite(self.gain_error_percent) and abs(self.gain_error_percent) < 50.0):
             raise ParameterError("gain_error_percent must be within +-50 %")
+        if len(self.tcp_offset_mm) != 3 or any(
+            not math.isfinite(v) or abs(v) > 500.0 for v in self.tcp_offset_mm
+        ):
+            raise ParameterError(
+                f"tcp_offset_mm must be 3 values within +-500, got {self.tcp_offset_mm}"
+            )
+        if len(self.tcp_rotvec_rad) != 3 or not (
+            all(math.isfinite(v) for v in self.tcp_rotvec_rad)
+            and math.hypot(*self.tcp_rotvec_rad) <= math.pi
+        ):
+            raise ParameterError(
+                f"tcp_rotvec_rad must be 3 values of norm <= pi, got {self.tcp_rotvec_rad}"
+            )
 
     def sim_uri(self) -> str:
         """The ``sim://`` URI of the cell this twin serves."""
@@ -223,8 +258,55 @@ def _bound(config: TwinConfig) -> Iterator[dict[str, socket.socket]]:
                 sock.close()
 
 
+class _ContactRows:
+    """The loop's contact-log rows (text, as written) to the CSV file and to the observers."""
+
+    def __init__(self, writer: Any, observers: ObserverThread | None) -> None:
+        self.writer = writer
+        self.observers = observers
+
+    def writerow(self, row: list[str]) -> None:
+        if self.writer is not None:
+            self.writer.writerow(row)
+        if self.observers is not None:
+            numbers = [float(v) for v in row[:-1]]
+            numbers.append(0.0 if row[-1] == "normal" else 1.0)
+            self.observers.row(round(numbers[0] * 1e9), numbers)
+
+
 def _pose6(p: np.ndarray, R: np.ndarray) -> list[float]:
     return [*p.tolist(), *rotvec_from_matrix(R)]
+
+
+def flange_wrenches(
+    wrench_tcp: np.ndarray,
+    R_base_tcp: np.ndarray,
+    R_flange_tcp: np.ndarray,
+    p_flange_tcp_m: np.ndarray,
+) -> tuple[list[float], list[float]]:
+    """What an e-Series reports of a wrench at its TCP: ``(actual_TCP_force, ft_raw_wrench)``.
+
+    Args:
+        wrench_tcp: ``[f, m]`` in the TCP frame, torque about the TCP origin [N, N*m].
+        R_base_tcp: the TCP's orientation in the base frame.
+        R_flange_tcp: the TCP offset's rotation (TCP axes in the flange frame).
+        p_flange_tcp_m: the TCP offset (TCP origin in the flange frame) [m].
+
+    Returns:
+        ``actual_TCP_force``: base orientation, torque about the flange origin,
+        ``[R f, R m + r x R f]`` with ``R = R_base_tcp`` and ``r = R_base_flange
+        p_flange_tcp`` (the inverse of :func:`ftcomp.hardware.ur_sensor.tcp_wrench_from_flange`);
+        ``ft_raw_wrench``: the flange frame, torque about the flange origin.
+    """
+    f_tcp, m_tcp = wrench_tcp[:3], wrench_tcp[3:]
+    f_base, m_base = R_base_tcp @ f_tcp, R_base_tcp @ m_tcp
+    lever_base = R_base_tcp @ (R_flange_tcp.T @ p_flange_tcp_m)
+    f_flange = R_flange_tcp @ f_tcp
+    m_flange = R_flange_tcp @ m_tcp + np.cross(p_flange_tcp_m, f_flange)
+    return (
+        [*f_base.tolist(), *(m_base + np.cross(lever_base, f_base)).tolist()],
+        [*f_flange.tolist(), *m_flange.tolist()],
+    )
 
 
 class _Twin:
@@ -240,6 +322,10 @@ class _Twin:
         self.config = config
         self.cell = cell
         self.controller = UrController(cell, _CYCLE_S)
+        self.tcp_offset = (
+            matrix_from_rotvec(config.tcp_rotvec_rad),
+            np.array(config.tcp_offset_mm, dtype=float) * 1e-3,
+        )
         self.sessions: list[RtdeSession] = []
         self.sessions_lock = threading.Lock()
         self.packets_closed = 0
@@ -301,7 +387,7 @@ class _Twin:
             if self._last_wrench is None
             else self._last_wrench
         )
-        w_base = [*(R @ np.array(w[:3])).tolist(), *(R @ np.array(w[3:])).tolist()]
+        tcp_force, raw_wrench = flange_wrenches(np.array(w), R, *self.tcp_offset)
         runtime, robot_bits, robot_mode = ctl.status()
         q = cell.q_rad.tolist()
         qd = cell.data.qvel[:6].tolist()
@@ -315,8 +401,8 @@ class _Twin:
             "target_q": cell.q_command_rad.tolist(),
             "actual_qd": qd,
             "target_qd": qd,
-            "actual_TCP_force": w_base,
-            "ft_raw_wrench": w,
+            "actual_TCP_force": tcp_force,
+            "ft_raw_wrench": raw_wrench,
             "robot_mode": robot_mode,
             "safety_mode": ctl.safety.safety_mode,
             "safety_status": ctl.safety.safety_mode,
@@ -440,10 +526,17 @@ class _Twin:
 
 
 def serve_twin(
-    config: TwinConfig, on_ready: Callable[[str], None], stop: threading.Event | None = None
+    config: TwinConfig,
+    on_ready: Callable[[str], None],
+    stop: threading.Event | None = None,
+    observers: Sequence[LogObserver] = (),
 ) -> TwinResult:
     """Build the cell, bind every socket, call ``on_ready`` with the ready line, and serve
     until ``config.seconds`` pass, ``stop`` is set, or SIGTERM / SIGINT arrives.
+
+    ``observers`` (e.g. :class:`ftcomp.views.foxglove_view.TwinView`, ``--view``) see every
+    cycle's contact-log row (:data:`CONTACT_LOG_COLUMNS`, as numbers; ``safety`` 1.0 in a
+    protective stop) on a worker thread: the loop only queues it.
 
     Raises:
         ParameterError: a socket cannot be bound (busy port, address not local), or an option
@@ -463,7 +556,12 @@ def serve_twin(
 
             document = truth_document(cell.true_gravity_model())
             document["mount"] = {"R_tcp_sensor": np.eye(3).tolist(), "p_tcp_sensor_m": [0, 0, 0]}
-            document["twin"] = {"robot": config.robot, "sim_uri": config.sim_uri()}
+            document["twin"] = {
+                "robot": config.robot,
+                "sim_uri": config.sim_uri(),
+                "tcp_offset_mm": list(config.tcp_offset_mm),
+                "tcp_rotvec_rad": list(config.tcp_rotvec_rad),
+            }
             atomic_write_text(config.truth_path, json.dumps(document, indent=2) + "\n")
         previous: dict[signal.Signals, Any] = {}
         if threading.current_thread() is threading.main_thread():
@@ -473,29 +571,19 @@ def serve_twin(
             on_ready(
                 f"twin ready: robot ur://{config.robot_host} sensor netft://{config.sensor_host}"
             )
-            if config.contact_log_path is None:
-                return twin.finish(twin.run(config.seconds, stop, None))
-            with atomic_output(config.contact_log_path) as tmp, open(tmp, "w", newline="") as f:
-                log = csv.writer(f)
-                log.writerow(
-                    [
-                        "t_s",
-                        "fx",
-                        "fy",
-                        "fz",
-                        "tx",
-                        "ty",
-                        "tz",
-                        "x",
-                        "y",
-                        "z",
-                        "rx",
-                        "ry",
-                        "rz",
-                        "safety",
-                    ]
-                )
-                return twin.finish(twin.run(config.seconds, stop, log))
+            with contextlib.ExitStack() as stack:
+                writer = None
+                if config.contact_log_path is not None:
+                    tmp = stack.enter_context(atomic_output(config.contact_log_path))
+                    writer = csv.writer(stack.enter_context(open(tmp, "w", newline="")))
+                    writer.writerow(CONTACT_LOG_COLUMNS)
+                thread = None
+                if observers:
+                    thread = ObserverThread(observers)
+                    stack.callback(thread.close)
+                    thread.open(CONTACT_LOG_COLUMNS)
+                sink = _ContactRows(writer, thread) if writer or thread else None
+                return twin.finish(twin.run(config.seconds, stop, sink))
         finally:
             twin.controller.stop_program()
             if twin.netft.proc.is_alive():

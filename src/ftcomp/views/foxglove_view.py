@@ -19,6 +19,12 @@ topic                           schema                       content
 ``/ftcomp/events``              ``foxglove.Log``             pose recorded, grasp, release, end
 ==============================  ===========================  ======================================
 
+``ftcomp twin --view HOST:PORT`` serves the twin's own state with :class:`TwinView` (the contact
+log's columns, one row per controller cycle): ``/twin/contact_wrench`` (``ftcomp.WrenchStamped``,
+frame ``base``: the wrench the surfaces exert on the load, torque about the TCP), ``/tf`` (base
+-> ``tcp``), ``/twin/safety`` (``ftcomp.SafetyState``: ``timestamp``, ``protective_stop``) and
+a ``foxglove.Log`` on ``/ftcomp/events`` when the safety state changes.
+
 The wrenches are JSON with a JSON schema (the Plot panel plots any numeric field, e.g.
 ``/ftcomp/wrench_compensated.force.z``); the stamps are the log's, in integer nanoseconds as
 ``{sec, nsec}``. A channel with no client subscribed costs one check per row. The session calls
@@ -31,9 +37,10 @@ from collections.abc import Sequence
 from typing import Any
 
 from ftcomp.errors import ParameterError
+from ftcomp.frames import matrix_from_rotvec, quat_from_matrix
 from ftcomp.ros2.mcap_log import RowLayout
 
-__all__ = ["SCHEMAS", "FoxgloveView", "parse_address"]
+__all__ = ["SCHEMAS", "TWIN_COLUMNS", "FoxgloveView", "TwinView", "parse_address"]
 
 _NS = 1_000_000_000
 _VECTOR = {
@@ -71,6 +78,16 @@ _TOPIC_SCHEMA = {
     "/ftcomp/twist_command": "ftcomp.TwistStamped",
 }
 _LEVELS = {"fault": "Error", "contact": "Warning"}
+#: The columns :class:`TwinView` reads from the twin's rows (the contact log's; ``safety``
+#: 1.0 in a protective stop, else 0.0).
+TWIN_COLUMNS = (
+    "t_s", "fx", "fy", "fz", "tx", "ty", "tz", "x", "y", "z", "rx", "ry", "rz", "safety",
+)  # fmt: skip
+_SAFETY_SCHEMA = {
+    "title": "ftcomp.SafetyState",
+    "type": "object",
+    "properties": {"timestamp": _TIME, "protective_stop": {"type": "boolean"}},
+}
 
 
 def parse_address(address: str) -> tuple[str, int]:
@@ -216,3 +233,65 @@ class FoxgloveView:
         server, self._server = self._server, None
         if server is not None:
             server.stop()
+
+
+class TwinView(FoxgloveView):
+    """Serves ``ftcomp twin``'s state live: its contact log's rows (:data:`TWIN_COLUMNS`) as
+    the contact wrench, the TCP pose and the safety state (see the module docstring).
+
+    Args:
+        address: ``HOST:PORT`` to bind to.
+
+    Raises:
+        ParameterError: ``foxglove-sdk`` is not installed, a bad address, or the port is taken.
+    """
+
+    def __init__(self, address: str) -> None:
+        super().__init__(address, sensor_frame="tcp", name="ftcomp twin")
+        self._safety: float | None = None
+        self._index = list(range(len(TWIN_COLUMNS)))
+
+    def open(self, columns: Sequence[str]) -> None:
+        """Advertise the twin's channels.
+
+        Raises:
+            ParameterError: the columns are not :data:`TWIN_COLUMNS`.
+        """
+        missing = [name for name in TWIN_COLUMNS if name not in columns]
+        if missing:
+            raise ParameterError(f"TwinView: the rows have no {', '.join(missing)}")
+        self._index = [list(columns).index(name) for name in TWIN_COLUMNS]
+        fox, context = self._fox, self._context
+        schema = SCHEMAS["ftcomp.WrenchStamped"]
+        self._channels["/twin/contact_wrench"] = fox.Channel(
+            "/twin/contact_wrench", schema=schema, context=context
+        )
+        self._channels["/twin/safety"] = fox.Channel(
+            "/twin/safety", schema=_SAFETY_SCHEMA, context=context
+        )
+        self._tf = fox.channels.FrameTransformsChannel("/tf", context=context)
+
+    def row(self, t_ns: int, row: Sequence[float]) -> None:
+        """Publish one of the twin's rows on every channel a client subscribed to."""
+        row = [row[k] for k in self._index]
+        stamp = _time(t_ns)
+        contact, safety = self._channels["/twin/contact_wrench"], self._channels["/twin/safety"]
+        if contact.has_sinks():
+            f, m = row[1:4], row[4:7]
+            message = {
+                "timestamp": stamp,
+                "frame_id": self.base_frame,
+                "force": {"x": f[0], "y": f[1], "z": f[2]},
+                "torque": {"x": m[0], "y": m[1], "z": m[2]},
+            }
+            contact.log(message, log_time=t_ns)
+        if self._tf.has_sinks():
+            pose = [*quat_from_matrix(matrix_from_rotvec(row[10:13])), *row[7:10]]
+            self._tf.log(self._transforms(stamp, pose), log_time=t_ns)
+        stopped = row[13] != 0.0
+        if safety.has_sinks():
+            safety.log({"timestamp": stamp, "protective_stop": stopped}, log_time=t_ns)
+        if self._safety is not None and row[13] != self._safety:
+            text = "protective stop" if stopped else "protective stop released"
+            self.event(t_ns, "fault" if stopped else "contact", text)
+        self._safety = row[13]

@@ -1,0 +1,93 @@
+"""Robot-side faults of the twin end ``ftcomp run`` at once with the documented stop, the log
+kept and valid: a protective stop, the RTDE stream stopping, the program stopped from the
+pendant (sensor-side faults: helper rt's watchdog tests)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("rtde_control")
+pytest.importorskip("pynetft")
+pytest.importorskip("mujoco")
+
+from ftcomp.io.calibration_json import FORMAT
+from standins.twin_process import running_twin
+
+FAULT_AT_S = 0.5
+SECONDS = 4.0
+#: fault -> (what run says, how long after the fault it may take to see it [s])
+STOPS = {
+    "protective-stop": ("the arm is in a protective stop", 0.0),
+    "rtde-stop": ("no new data from the controller for 0.50 s", 0.5),
+    "script-stop": ("program", 0.0),
+}
+SCRIPT_STOP_IGNORED = pytest.mark.xfail(
+    reason="ur_rtde's speedL returns False once the program is stopped (runtime_state 1), and "
+    "hardware/ur.py ignores it: run goes on to its time-out, commanding nothing. The fix "
+    "belongs in URRobot (check runtime_state or speedL's result), outside this change",
+    strict=True,
+)
+#: The client's sensor watchdog's stops (pynetft's reader starved on a loaded host).
+CLIENT_STARVED = ("protective stop: repeated_sample", "protective stop: stale_sample")
+RTDE_STOP_HANGS = pytest.mark.xfail(
+    reason="sometimes (1 run in about 6, under load) ur_rtde's control interface notices the "
+    "silent stream first ('Could not receive data from robot... reconnecting') and its "
+    "reconnect blocks run's speedL for more than the test's 20 s, so URRobot.check never "
+    "runs: a fix for hardware/ur.py (a bounded reconnect, or checking before sending)",
+    strict=False,
+)
+CLIENT = "import sys; sys.setswitchinterval(2e-4); from ftcomp.cli import main; sys.exit(main())"
+
+
+def _calibration_from_truth(truth: Path, calibration: Path) -> None:
+    """A calibration file holding the twin's true tool (the run needs a compensation only)."""
+    document = json.loads(truth.read_text())
+    keys = ("tool_weight_N", "center_of_gravity_m", "force_bias_N", "torque_bias_Nm")
+    data = {key: document[key] for key in (*keys, "base_tilt_deg", "gravity_in_base_N")}
+    calibration.write_text(json.dumps({"format": FORMAT, "method": "paper", **data}))
+
+
+@pytest.mark.parametrize(
+    "fault",
+    [
+        "protective-stop",
+        pytest.param("rtde-stop", marks=RTDE_STOP_HANGS),
+        pytest.param("script-stop", marks=SCRIPT_STOP_IGNORED),
+    ],
+)
+def test_a_robot_fault_ends_run_at_once_with_its_stop_and_a_valid_log(
+    fault: str, tmp_path: Path
+) -> None:
+    truth, calibration, log = tmp_path / "truth.json", tmp_path / "cal.json", tmp_path / "run.csv"
+    options = ("--truth", str(truth), "--fault", fault, "--fault-at-s", str(FAULT_AT_S))
+    with running_twin(f"twin_run_{fault}", *options) as twin:
+        _calibration_from_truth(truth, calibration)
+        done = subprocess.run(
+            [sys.executable, "-c", CLIENT, "run", "--robot", twin.robot_uri,
+             "--sensor", twin.sensor_uri, "-c", str(calibration), "--control", "admittance",
+             "--axes", "z", "--settle-band-N", "0.0001", "--seconds", str(SECONDS),
+             "--max-late-cycles", "50", "-o", str(log)],
+            capture_output=True, text=True, timeout=20, check=False,
+        )  # fmt: skip
+    message, detection_s = STOPS[fault]
+    if message not in done.stderr and any(w in done.stderr for w in CLIENT_STARVED):
+        # The client's own sensor watchdog, before the fault: a starved client process on a
+        # loaded host (docs/twin.md, Known gaps), not what this test is about.
+        pytest.skip(f"the client was starved before the fault: {done.stderr[-300:]}")
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert message in done.stderr and "the robot was stopped" in done.stderr, done.stderr
+    with log.open() as f:
+        rows = list(csv.reader(f))
+    header, body = rows[0], rows[1:]
+    assert body and all(len(row) == len(header) for row in body)
+    t_s = [float(row[0]) for row in body]
+    assert all(math.isfinite(t) for t in t_s) and t_s == sorted(t_s)
+    # at once: the run's clock starts with its RTDE stream, the fault's clock too
+    assert t_s[-1] <= FAULT_AT_S + detection_s + 0.5, t_s[-1]
