@@ -112,7 +112,7 @@ def test_the_output_never_replaces_an_input_nor_an_existing_file_without_overwri
     assert compensate_file(src, out, calibration, CompensateConfig(overwrite=True)).rows == 20
 
 
-def test_a_bias_drift_needs_time_stamps_and_is_reported_when_extrapolated(
+def test_a_bias_drift_needs_time_stamps_and_is_reported_when_held_beyond_its_range(
     tmp_path: Path, rng: np.random.Generator, calibration: Calibration
 ) -> None:
     drift = BiasDrift(1, 0.0, 0.0, 1.0, np.full((1, 6), 1e-3), np.full((1, 6), 1e-4))
@@ -121,7 +121,7 @@ def test_a_bias_drift_needs_time_stamps_and_is_reported_when_extrapolated(
     write_recording(src, rng, 50, t0_s=0.98)  # 0.98 .. 1.029 s: past the fitted 0 .. 1 s
     result = compensate_file(src, tmp_path / "out.csv", drifting)
     assert result.t_range_s == pytest.approx((0.98, 1.029))
-    assert len(result.warnings) == 1 and "extrapolated" in result.warnings[0]
+    assert len(result.warnings) == 1 and "not extrapolated" in result.warnings[0]
     untimed = tmp_path / "untimed.csv"
     untimed.write_text("qx,qy,qz,qw,fx,fy,fz,tx,ty,tz\n0,0,0,1,0,0,3,0,0,0\n")
     with pytest.raises(ParameterError, match=r"linear bias drift.*no 't'"):

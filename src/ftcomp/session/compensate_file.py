@@ -96,8 +96,8 @@ class CompensateResult:
         contact_wrench_mean_sensor: mean contact wrench [N, N*m], sensor frame, (6,).
         t_range_s: first and last time stamp [s] when the calibration's bias drift was applied
             from them; None otherwise.
-        warnings: things that look wrong but were accepted (the input's, and a bias drift
-            extrapolated beyond its calibrated time range).
+        warnings: things that look wrong but were accepted (the input's, and rows beyond
+            the bias drift's calibrated time range, where it is held, not extrapolated).
     """
 
     output: Path
@@ -316,12 +316,9 @@ def compensate_file(
         totals = _write(reader, GravityCompensator(calibration), out, to_parquet, done)
     warnings = list(reader.warnings)
     t_range = (totals.t_min, totals.t_max) if drift is not None and totals.rows else None
-    if drift is not None and (totals.t_min < drift.t_min_s or totals.t_max > drift.t_max_s):
-        warnings.append(
-            f"rows at t = {totals.t_min:.6g} .. {totals.t_max:.6g} s lie outside the "
-            f"calibrated time range {drift.t_min_s:.6g} .. {drift.t_max_s:.6g} s: the "
-            f"{drift.name} bias drift is extrapolated there (re-bias with ftcomp rebias)"
-        )
+    outside = drift.outside(totals.t_min, totals.t_max) if drift is not None else None
+    if outside is not None:
+        warnings.append(outside)
     rows = totals.rows
     return CompensateResult(
         output=out,
