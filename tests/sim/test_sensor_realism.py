@@ -77,3 +77,13 @@ def test_sim_uri_rejects_a_bad_gain_with_the_option_named() -> None:
         sensor_spec_from_uri(parse_uri("sim://?gain_error_percent=80"))
     with pytest.raises(ParameterError, match="drift_N_per_min"):
         sensor_spec_from_uri(parse_uri("sim://?drift_N_per_min=1,2"))
+
+
+def test_sim_uri_gives_the_realistic_drift_at_a_scale() -> None:
+    spec = sensor_spec_from_uri(parse_uri("sim://?realistic_drift=2"))
+    reference = SensorSpec().realistic_drift(2.0)
+    np.testing.assert_array_equal(spec.bias_wander_std, reference.bias_wander_std)
+    np.testing.assert_array_equal(spec.bias_trend, reference.bias_trend)
+    assert spec.bias_wander_time_constant_s == reference.bias_wander_time_constant_s
+    with pytest.raises(ParameterError, match="realistic_drift"):
+        sensor_spec_from_uri(parse_uri("sim://?realistic_drift=-1"))

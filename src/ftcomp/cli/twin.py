@@ -75,6 +75,14 @@ def register(parser: argparse.ArgumentParser) -> None:
         "--drift-N-per-min", default="0,0,0", help="force-bias drift x,y,z [N/min] (default 0,0,0)"
     )
     parser.add_argument(
+        "--realistic-drift",
+        type=float,
+        default=0.0,
+        metavar="SCALE",
+        help="a real sensor's bias drift times SCALE: a wander of 0.15-0.2 N over minutes and a "
+        "warm-up of 0.2-0.4 N over half an hour (default 0: none)",
+    )
+    parser.add_argument(
         "--truth",
         metavar="FILE",
         help="write the true tool, bias, tilt, mount (default: not written)",
@@ -136,6 +144,7 @@ def run(args: argparse.Namespace) -> int:
         tilt_deg=(tilt[0], tilt[1]),
         seed=args.seed,
         gain_error_percent=args.gain_error_percent,
+        realistic_drift=args.realistic_drift,
         drift_N_per_min=(drift[0], drift[1], drift[2]),
         truth_path=Path(args.truth) if args.truth else None,
         contact_log_path=Path(args.contact_log) if args.contact_log else None,

@@ -15,6 +15,9 @@ Robot URI options (all optional)::
           &drift_Nm_per_min=X,Y,Z           torque-bias drift rate [N*m/min] (default 0)
           &drift_walk_N=S     force-bias random walk: its std after one minute [N]; the
                               torque walk gets S times the torque/force noise ratio (default 0)
+          &realistic_drift=S  a real sensor's drift times S: a smooth wander (5 min time
+                              constant) and a warm-up trend (30 min), SensorSpec.realistic_drift
+                              (default 0: none)
 
 The sensor URI is ``sim://`` with no options: the cell's own sensor, which needs the robot to be
 ``sim://`` too (they share the simulation clock). The simulated TCP is the sensor frame, so the
@@ -86,7 +89,13 @@ def scene_from_uri(uri: Uri) -> tuple[SceneConfig, int, bool]:
     return scene, seed, grasp
 
 
-_SENSOR_OPTIONS = ("gain_error_percent", "drift_N_per_min", "drift_Nm_per_min", "drift_walk_N")
+_SENSOR_OPTIONS = (
+    "gain_error_percent",
+    "drift_N_per_min",
+    "drift_Nm_per_min",
+    "drift_walk_N",
+    "realistic_drift",
+)
 
 
 def sensor_spec_from_uri(uri: Uri) -> SensorSpec:
@@ -107,12 +116,15 @@ def sensor_spec_from_uri(uri: Uri) -> SensorSpec:
     rate_f = reader.floats("drift_N_per_min", (0.0, 0.0, 0.0))
     rate_t = reader.floats("drift_Nm_per_min", (0.0, 0.0, 0.0))
     walk = reader.number("drift_walk_N", 0.0) or 0.0
+    realistic = reader.number("realistic_drift", 0.0) or 0.0
     reader.done()
+    if not (math.isfinite(realistic) and 0.0 <= realistic <= 100.0):
+        raise ParameterError(f"{uri.text!r}: realistic_drift must be in 0 .. 100, got {realistic}")
     if any(abs(g) >= 50.0 for g in gain):
         raise ParameterError(f"{uri.text!r}: gain_error_percent must be within +-50 %")
     if walk < 0.0:
         raise ParameterError(f"{uri.text!r}: drift_walk_N must be >= 0, got {walk}")
-    base = SensorSpec()
+    base = SensorSpec().realistic_drift(realistic) if realistic else SensorSpec()
     walk_6 = np.repeat([walk, walk * base.torque_noise_std_Nm / base.force_noise_std_N], 3)
     return replace(
         base,

@@ -116,6 +116,7 @@ class TwinConfig:
         tilt_deg: base mounting tilt ``(U, V)`` [deg].
         seed: the sensor noise's seed (the same options give the same readings).
         gain_error_percent: the sensor's gain error on every axis [%].
+        realistic_drift: a real sensor's bias drift (wander and warm-up) times this, 0: none.
         drift_N_per_min: force-bias drift rate, x y z [N/min].
         truth_path: write the true tool, bias, tilt and mount here (JSON), or None.
         contact_log_path: write the contact log here (CSV), or None.
@@ -140,6 +141,7 @@ class TwinConfig:
     tilt_deg: tuple[float, float] = (0.0, 0.0)
     seed: int = 0
     gain_error_percent: float = 0.0
+    realistic_drift: float = 0.0
     drift_N_per_min: tuple[float, float, float] = (0.0, 0.0, 0.0)
     truth_path: Path | None = None
     contact_log_path: Path | None = None
@@ -184,6 +186,8 @@ class TwinConfig:
             raise ParameterError(f"seed must be >= 0, got {self.seed}")
         if not (math.isfinite(self.gain_error_percent) and abs(self.gain_error_percent) < 50.0):
             raise ParameterError("gain_error_percent must be within +-50 %")
+        if not (math.isfinite(self.realistic_drift) and 0.0 <= self.realistic_drift <= 100.0):
+            raise ParameterError(f"realistic_drift must be in 0 .. 100, got {self.realistic_drift}")
         if len(self.tcp_offset_mm) != 3 or any(
             not math.isfinite(v) or abs(v) > 500.0 for v in self.tcp_offset_mm
         ):
@@ -208,6 +212,8 @@ class TwinConfig:
         parts.append(f"surface={self.surface}")
         if self.gain_error_percent:
             parts.append(f"gain_error_percent={self.gain_error_percent:g}")
+        if self.realistic_drift:
+            parts.append(f"realistic_drift={self.realistic_drift:g}")
         if any(self.drift_N_per_min):
             parts.append("drift_N_per_min=" + ",".join(f"{v:g}" for v in self.drift_N_per_min))
         return "sim://?" + "&".join(parts)
