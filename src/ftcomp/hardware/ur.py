@@ -327,8 +327,16 @@ class URRobot(LatenessOfPacer):
     def _sent(self, accepted: bool, command: str) -> None:
         """Raise when the controller refused a motion command: ``ur_rtde`` returns False when
         its control script no longer runs (stopped from the pendant, another program started),
-        and a loop that keeps commanding into nothing no longer controls the arm."""
+        and a loop that keeps commanding into nothing no longer controls the arm. A protective
+        or emergency stop also ends the script, and the receive side may show it a period
+        later: it is waited for (a few periods) so the error names the real cause."""
         if not accepted:
+            deadline = time.monotonic() + 3 * self.control_period_s
+            while True:
+                self.check()  # raises naming a safety stop or a lost connection
+                if time.monotonic() >= deadline:
+                    break
+                time.sleep(self.control_period_s / 4)
             raise HardwareError(
                 f"{self.uri.text!r}: the controller refused {command} (its control script is not "
                 "running: stopped from the pendant or another program started?); motion stopped"
