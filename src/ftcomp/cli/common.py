@@ -10,11 +10,15 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ftcomp.calibration_record import Calibration
+    from ftcomp.session.run import RunResult
+    from ftcomp.session.stream import StreamResult
+
+    LiveResult = RunResult | StreamResult
 
 __all__ = [
     "add_range_argument",
     "add_track_bias_argument",
-    "bias_tracking_line",
+    "live_end_lines",
     "parse_range",
     "print_warnings",
     "warn_live_drift",
@@ -76,12 +80,19 @@ def add_track_bias_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def bias_tracking_line(correction: Iterable[float] | None, updates: int) -> str | None:
-    """One line on what the bias tracking did (None when it was off)."""
-    if correction is None:
-        return None
-    c = list(correction)
-    return (
-        f"bias tracking: {updates} updates, the bias moved by [{c[0]:+.3f} {c[1]:+.3f} "
-        f"{c[2]:+.3f}] N [{c[3]:+.4f} {c[4]:+.4f} {c[5]:+.4f}] N·m from the calibration's"
-    )
+def live_end_lines(result: LiveResult) -> list[str]:
+    """What every live command prints at its end besides its summary: the loop's timing line,
+    the rows its observers dropped, what the bias tracking did."""
+    lines = [] if result.timing is None else [result.timing.line()]
+    if result.observer_dropped_rows:
+        lines.append(
+            f"observers: {result.observer_dropped_rows} log rows dropped (their queue was full)"
+        )
+    c = result.bias_correction
+    if c is not None:
+        lines.append(
+            f"bias tracking: {result.bias_updates} updates, the bias moved by [{c[0]:+.3f} "
+            f"{c[1]:+.3f} {c[2]:+.3f}] N [{c[3]:+.4f} {c[4]:+.4f} {c[5]:+.4f}] N·m from the "
+            "calibration's"
+        )
+    return lines

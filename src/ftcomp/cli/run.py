@@ -26,7 +26,7 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from ftcomp.cli.common import add_track_bias_argument, bias_tracking_line, warn_live_drift
+from ftcomp.cli.common import add_track_bias_argument, live_end_lines, warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import add_view_arguments
 from ftcomp.errors import ParameterError
@@ -234,13 +234,8 @@ def run(args: argparse.Namespace) -> int:
             f"mean force error over the last {window_s:g} s "
             f"[{e[0]:+.3f} {e[1]:+.3f} {e[2]:+.3f}] N ({args.frame} frame)"
         )
-    if result.timing is not None:
-        print(result.timing.line())
-    if result.observer_dropped_rows:
-        print(f"observers: {result.observer_dropped_rows} log rows dropped (their queue was full)")
-    tracking = bias_tracking_line(result.bias_correction, result.bias_updates)
-    if tracking is not None:
-        print(tracking)
+    for line in live_end_lines(result):
+        print(line)
     if config.online_load:
         print(f"online load: rate {1.0 / result.period_s:.1f} Hz (1 / the robot's control period)")
         print("\n".join(event_lines(list(result.load_events))))

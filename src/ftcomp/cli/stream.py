@@ -24,7 +24,7 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from ftcomp.cli.common import add_track_bias_argument, bias_tracking_line, warn_live_drift
+from ftcomp.cli.common import add_track_bias_argument, live_end_lines, warn_live_drift
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import StatusLine, add_view_arguments
 from ftcomp.errors import ParameterError
@@ -155,13 +155,8 @@ def run(args: argparse.Namespace) -> int:
         f"{result.readings} readings in {result.elapsed_s:.2f} s ({result.rate_hz:.0f} Hz) "
         f"to {output}{_health_text(result.health)}"
     )
-    if result.timing is not None:
-        print(result.timing.line())
-    if result.observer_dropped_rows:
-        print(f"observers: {result.observer_dropped_rows} log rows dropped (their queue was full)")
-    tracking = bias_tracking_line(result.bias_correction, result.bias_updates)
-    if tracking is not None:
-        print(tracking)
+    for line in live_end_lines(result):
+        print(line)
     if result.online_rate_source:
         print(f"online load: rate {result.online_rate_hz:.1f} Hz ({result.online_rate_source})")
         print("\n".join(event_lines(list(result.load_events))))
