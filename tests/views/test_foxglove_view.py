@@ -117,16 +117,19 @@ def test_a_spec_client_receives_the_compensated_wrench_rows_of_a_live_stream(
     env = {**os.environ, "PYTHONPATH": str(Path(ftcomp.__file__).parents[1])}
     process = subprocess.Popen([sys.executable, "-c", code, *argv], env=env)
     deadline = time.monotonic() + DEADLINE_S
+    interrupted: list[bool] = []
+
+    def ctrl_c() -> None:  # once: a second Ctrl-C would cut the stream's tidy end short
+        interrupted.append(True)
+        process.send_signal(signal.SIGINT)
+
     try:
         channel, received = _subscribe_and_receive(
-            f"ws://127.0.0.1:{port}",
-            "/ftcomp/wrench_compensated",
-            deadline,
-            lambda: process.send_signal(signal.SIGINT),  # Ctrl-C: the stream keeps its log
-        )
+            f"ws://127.0.0.1:{port}", "/ftcomp/wrench_compensated", deadline, ctrl_c
+        )  # Ctrl-C: the stream keeps its log
     finally:
-        if process.poll() is None:
-            process.send_signal(signal.SIGINT)
+        if not interrupted and process.poll() is None:
+            ctrl_c()
         returncode = process.wait(timeout=DEADLINE_S)
     assert returncode == 130
     assert channel["schemaName"] == "ftcomp.WrenchStamped"
