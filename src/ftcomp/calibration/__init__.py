@@ -12,8 +12,11 @@ them, :mod:`ftcomp.compensation` applies them.
   drifting bias (:mod:`.drift`) and/or an unknown mount rotation (:mod:`.mount`), on the fit of
   :mod:`.extended`; :mod:`.rebias`: the bias alone from still readings.
 - :mod:`.dynamic`: the tool's inertia tensor from a fast excitation trajectory.
-- :mod:`.design`: D-optimal calibration poses; :mod:`.collect`: static readings at a list of
-  poses from any robot and sensor; :mod:`.still`: the still segments of a recording in motion.
+- :mod:`.stochastic`: the bias as a stochastic process in time (``--bias-drift stochastic``);
+  :mod:`.sensor_map`: a general linear force/torque map regularised toward the paper's model.
+- :mod:`.design`: D-optimal calibration poses, :mod:`.reachable_design` on an arm that does not
+  reach every orientation; :mod:`.collect`: static readings at a list of poses from any robot
+  and sensor; :mod:`.still`: the still segments of a recording in motion.
 
 The package imports none of its modules (``__all__`` names them), so a command loads only the
 ones it uses.
@@ -31,6 +34,9 @@ __all__ = [
     "methods",
     "mount",
     "outliers",
+    "reachable_design",
     "rebias",
+    "sensor_map",
     "still",
+    "stochastic",
 ]

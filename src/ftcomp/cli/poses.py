@@ -24,6 +24,7 @@ from ftcomp.calibration.design import (
     predicted_std_errors,
     tilt_from_down_rad,
 )
+from ftcomp.calibration.reachable_design import Reachability, design_reachable_poses
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import ChecksReachability, Robot
 from ftcomp.io.atomic import atomic_write_text, check_writable
@@ -123,157 +124,51 @@ def _position_m(position_mm: list[float]) -> NDArray[np.float64]:
     return p
 
 
-#: The design checks the candidates it chooses, round after round; a D-optimal design prefers the
-#: most tilted orientations, the ones an arm reaches least, so after ``_FEW`` unreachable ones it
-#: stops asking and samples instead: candidates in a seeded random order, until it has
-#: ``_POOL_PER_POSE`` reachable ones per designed pose (and ``_MIN_SAMPLE`` for the fraction) or
-#: has checked ``_MAX_SAMPLE`` (the time bound: each check is one inverse kinematics, tens of ms
-#: when out of reach), and designs among the reachable ones found. The sample gives the
-#: reachable fraction, which is reported.
-_FEW = 20
-_POOL_PER_POSE = 4
-_MIN_SAMPLE = 20
-_MAX_SAMPLE = 200
+def _urdf_reach(args: argparse.Namespace) -> tuple[Reachability, str]:
+    """The reach check by the URDF chain's inverse kinematics, and its description."""
+    from ftcomp.ros2.urdf import UrdfChain
+    from ftcomp.ros2.urdf_ik import UrdfIk, front_position, mid_configuration
 
-
-class _BudgetSpentError(Exception):
-    """The design's own choices missed ``_FEW`` times: sample the candidates instead."""
-
-
-class _Reach:
-    """``R -> bool``: whether the tip reaches an orientation at one position ``p`` [m]; counts
-    the candidates checked, remembers the answers, and estimates the reachable fraction."""
-
-    def __init__(self, source: str, who: str, p: NDArray[np.float64]) -> None:
-        self.source = source  # the option naming the check, for messages
-        self.who = who  # what checks, for the warnings
-        self.p = p
-        self.checked = self.reached = 0
-        self.sampled = self.sampled_reached = 0
-        self._known: dict[bytes, bool] = {}
-
-    def reaches(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> bool:
-        """Whether the tip reaches orientation ``R`` at ``p`` [m]."""
-        raise NotImplementedError
-
-    def describe(self) -> str:
-        """What checks, for the summary."""
-        raise NotImplementedError
-
-    def _check(self, R: NDArray[np.float64]) -> bool:
-        key = np.asarray(R, dtype=float).tobytes()
-        if key not in self._known:  # the design asks again for what a round before chose
-            self.checked += 1
-            self._known[key] = self.reaches(self.p, R)
-            self.reached += self._known[key]
-        return self._known[key]
-
-    def __call__(self, R: NDArray[np.float64]) -> bool:
-        ok = self._check(R)
-        if self.checked - self.reached >= _FEW:
-            raise _BudgetSpentError
-        return ok
-
-    def reachable_sample(self, candidates: NDArray[np.float64], count: int) -> NDArray[np.float64]:
-        """The reachable candidates among a seeded random sample (and those found before).
-
-        Raises:
-            ParameterError: fewer than ``count`` reachable ones (with the fraction).
-        """
-        order = np.random.default_rng(0).permutation(len(candidates))[:_MAX_SAMPLE]
-        pool = [R for R in candidates if self._known.get(np.asarray(R).tobytes(), False)]
-        for j in order:
-            if len(pool) >= _POOL_PER_POSE * count and self.sampled >= _MIN_SAMPLE:
-                break
-            self.sampled += 1
-            ok = self._check(candidates[j])
-            self.sampled_reached += ok
-            if ok and not any(np.array_equal(candidates[j], R) for R in pool):
-                pool.append(candidates[j])
-        if len(pool) < count:
-            raise ParameterError(
-                f"{self.source}: {self.sampled - self.sampled_reached} of {self.sampled} "
-                "candidate orientations sampled at random are out of reach with the tip at "
-                f"{np.round(self.p, 4).tolist()} m ({self.fraction()} reachable); too few "
-                f"reachable ones for --count {count}: give a --position-mm where the arm turns "
-                "the tip more freely, or a smaller --max-tilt-deg"
-            )
-        return np.asarray(pool)
-
-    def fraction(self) -> str:
-        """The reachable fraction of the random sample, as text."""
-        if not self.sampled:
-            return "no sample"
-        return f"{self.sampled_reached / self.sampled:.0%} of {self.sampled}"
-
-    def summary(self) -> str:
-        text = (
-            f"reachability: {self.describe()}, tip at {np.round(self.p, 4).tolist()} m: "
-            f"{self.reached} of {self.checked} candidate orientations checked reached by "
-            "inverse kinematics"
-        )
-        if self.sampled:
-            text += (
-                f"; the design's own choices missed {_FEW} times, so it chose among reachable "
-                f"candidates sampled at random: {self.fraction()} sampled are reachable"
-            )
-        return text
-
-
-class _UrdfReach(_Reach):
-    """By the URDF chain's inverse kinematics."""
-
-    def __init__(self, args: argparse.Namespace) -> None:
-        from ftcomp.ros2.urdf import UrdfChain
-        from ftcomp.ros2.urdf_ik import UrdfIk, front_position, mid_configuration
-
-        self.chain = UrdfChain(args.urdf, args.base_link, args.tip_link)
-        self.ik = UrdfIk(self.chain)
-        given = args.position_mm is not None
-        p = _position_m(args.position_mm) if given else front_position(self.chain)
-        if not given and self.ik.solve(p) is None:  # a short or odd chain
-            p = self.ik.pose(mid_configuration(self.chain))[0]
+    chain = UrdfChain(args.urdf, args.base_link, args.tip_link)
+    ik = UrdfIk(chain)
+    given = args.position_mm is not None
+    p = _position_m(args.position_mm) if given else front_position(chain)
+    if not given and ik.solve(p) is None:  # a short or odd chain
+        p = ik.pose(mid_configuration(chain))[0]
+    if ik.solve(p) is None:
         where = (
             "--position-mm " + " ".join(f"{v:g}" for v in args.position_mm)
             if given
             else "the default position"
         )
-        if self.ik.solve(p) is None:
-            raise ParameterError(
-                f"{where} {np.round(p, 4).tolist()} m: the tip link {self.chain.tip_link!r} "
-                f"of {args.urdf} cannot reach it within the joint limits"
-            )
-        super().__init__(f"--urdf {self.chain.source}", "the URDF's inverse kinematics", p)
+        raise ParameterError(
+            f"{where} {np.round(p, 4).tolist()} m: the tip link {chain.tip_link!r} "
+            f"of {args.urdf} cannot reach it within the joint limits"
+        )
+    reach = Reachability(
+        lambda p, R: ik.solve(p, R) is not None,
+        p,
+        source=f"--urdf {chain.source}",
+        who="the URDF's inverse kinematics",
+    )
+    describe = (
+        f"{chain.source}, {chain.base_link} -> {chain.tip_link} ({len(chain.joint_names)} joints)"
+    )
+    return reach, describe
 
-    def reaches(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> bool:
-        return self.ik.solve(p, R) is not None
 
-    def describe(self) -> str:
-        c = self.chain
-        return f"{c.source}, {c.base_link} -> {c.tip_link} ({len(c.joint_names)} joints)"
-
-
-class _RobotReach(_Reach):
-    """By the robot's own check (:class:`~ftcomp.hardware.protocols.ChecksReachability`), its
-    TCP taken as the sensor frame."""
-
-    def __init__(self, args: argparse.Namespace, robot: Robot) -> None:
-        if not isinstance(robot, ChecksReachability):
-            raise ParameterError(
-                f"--robot {args.robot}: this robot cannot check whether it reaches a pose "
-                "(sim://... and ur://HOST can); give one of those, or --urdf ROBOT.urdf"
-            )
-        self.robot: ChecksReachability = robot
-        given = args.position_mm is not None
-        # Where the TCP is now, to the micrometre the pose file keeps (and without a -0).
-        p = _position_m(args.position_mm) if given else np.round(robot.pose().p_base_tcp, 6) + 0.0
-        super().__init__(f"--robot {args.robot}", args.robot, p)
-
-    def reaches(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> bool:
-        return self.robot.is_reachable(p, R)
-
-    def describe(self) -> str:
-        return self.who
+def _robot_reach(args: argparse.Namespace, robot: Robot) -> tuple[Reachability, str]:
+    """The reach check by the robot's own (its TCP taken as the sensor frame)."""
+    if not isinstance(robot, ChecksReachability):
+        raise ParameterError(
+            f"--robot {args.robot}: this robot cannot check whether it reaches a pose "
+            "(sim://... and ur://HOST can); give one of those, or --urdf ROBOT.urdf"
+        )
+    given = args.position_mm is not None
+    # Where the TCP is now, to the micrometre the pose file keeps (and without a -0).
+    p = _position_m(args.position_mm) if given else np.round(robot.pose().p_base_tcp, 6) + 0.0
+    reach = Reachability(robot.is_reachable, p, source=f"--robot {args.robot}", who=args.robot)
+    return reach, args.robot
 
 
 def _csv(R: NDArray[np.float64], ids: list[str], p: NDArray[np.float64] | None) -> str:
@@ -314,18 +209,21 @@ def run(args: argparse.Namespace) -> int:
     output = check_writable(args.output, overwrite=args.force, inputs=inputs)
     kept = read_pose_file(args.keep) if args.keep else None
     with contextlib.ExitStack() as stack:
-        reach: _Reach | None = None
+        reach: tuple[Reachability, str] | None = None
         if args.urdf:
-            reach = _UrdfReach(args)
+            reach = _urdf_reach(args)
         elif args.robot:
             from ftcomp.hardware.registry import open_robot
 
-            reach = _RobotReach(args, stack.enter_context(open_robot(args.robot)))
+            reach = _robot_reach(args, stack.enter_context(open_robot(args.robot)))
         return _design(args, output, kept, reach)
 
 
 def _design(
-    args: argparse.Namespace, output: Path, kept: PoseList | None, reach: _Reach | None
+    args: argparse.Namespace,
+    output: Path,
+    kept: PoseList | None,
+    reach_described: tuple[Reachability, str] | None,
 ) -> int:
     """Design ``args.count`` poses after ``kept``, write them to ``output``, print."""
     from ftcomp import paper
@@ -333,12 +231,11 @@ def _design(
     R_keep = kept.rotations.as_matrix().reshape(-1, 3, 3) if kept is not None else None
     theta = nominal_theta()
     candidates = candidate_orientations(args.max_tilt_deg)
-    try:
-        designed = design_poses(args.count, candidates, theta, keep=R_keep, reachable=reach)
-    except _BudgetSpentError:
-        assert reach is not None
-        pool = reach.reachable_sample(candidates, args.count)
-        designed = design_poses(args.count, pool, theta, keep=R_keep)
+    reach = reach_described[0] if reach_described is not None else None
+    if reach is None:
+        designed = design_poses(args.count, candidates, theta, keep=R_keep)
+    else:
+        designed = design_reachable_poses(args.count, candidates, theta, keep=R_keep, reach=reach)
     n_keep = 0 if R_keep is None else len(R_keep)
     R_all = designed if R_keep is None else np.concatenate([R_keep, designed])
     order = order_for_travel(R_all, fixed_prefix=n_keep)
@@ -360,8 +257,9 @@ def _design(
         f"{len(R_all)} poses ({n_keep} kept, {args.count} designed, max tilt "
         f"{np.degrees(tilt_from_down_rad(R_all)).max():.1f} deg) written to {output}"
     )
-    if reach is not None and p_all is not None:
-        print(reach.summary())
+    if reach_described is not None and p_all is not None:
+        reach, describe = reach_described
+        print(reach.summary(describe))
         for pid, R, p in zip(ids, R_all, p_all, strict=True):
             if pid in taken and not reach.reaches(p, R):
                 print(
