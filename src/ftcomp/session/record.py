@@ -42,6 +42,7 @@ from ftcomp.io.atomic import check_writable
 from ftcomp.io.samples_csv import write_samples
 from ftcomp.samples import PoseList, Samples
 from ftcomp.session.hand_guided import ManualRecorder, StillCriteria
+from ftcomp.session.interrupts import InterruptHold
 from ftcomp.session.log import LogObserver, ObserverThread, save_timing
 from ftcomp.session.pose_record import (
     PoseEvent,
@@ -319,16 +320,18 @@ def record(
         if isinstance(plan, HandGuided)
         else None
     )
-    try:
-        ended, reason = _run_plan(robot, sensor, plan, mount, driven, recorded, file, timing)
-    finally:
-        if thread is not None:
-            last_ns = int(file.records[-1].t_ns[-1]) if file.records else 0
-            thread.event(last_ns, "end" if ended == "complete" else "fault", reason or ended)
-            thread.close()
-    summary = timing.summary() if timing is not None and timing.cycles else None
-    if summary is not None and file.records:
-        save_timing(output, summary)
+    with InterruptHold() as hold:
+        try:
+            ended, reason = _run_plan(robot, sensor, plan, mount, driven, recorded, file, timing)
+        finally:
+            hold.finishing(f"finishing {output}")
+            if thread is not None:
+                last_ns = int(file.records[-1].t_ns[-1]) if file.records else 0
+                thread.event(last_ns, "end" if ended == "complete" else "fault", reason or ended)
+                thread.close()
+        summary = timing.summary() if timing is not None and timing.cycles else None
+        if summary is not None and file.records:
+            save_timing(output, summary)
     return RecordResult(
         output=output,
         ended=ended,

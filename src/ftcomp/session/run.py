@@ -49,6 +49,7 @@ from ftcomp.hardware.protocols import Mount, Robot, TakesControl, WrenchSensor
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
 from ftcomp.session.compliant import CompliantStep, CycleRecord, SettleRule
+from ftcomp.session.interrupts import InterruptHold
 from ftcomp.session.log import CsvLog, LogObserver, csv_log, save_timing
 from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, LoadTracker, require_tool_weight
 
@@ -362,7 +363,10 @@ def run_compliant(
         columns = (*columns, "bias_updated")
     summary = _Summary(config.settle.hold_s if config.settle is not None else 0.3)
     outcome, message = "", ""
-    with csv_log(log_path, columns, digits=17, observers=observers) as log:
+    with (
+        InterruptHold() as hold,
+        csv_log(log_path, columns, digits=17, observers=observers) as log,
+    ):
         t0_ns: list[int] = []
 
         def on_cycle(record: CycleRecord) -> None:
@@ -405,6 +409,7 @@ def run_compliant(
             outcome, message = "interrupted", "interrupted (Ctrl-C)"
         except FtcompError as exc:
             outcome, message = "error", str(exc)
+        hold.finishing(f"finishing the log {log_path}")
         if not message and outcome == "loop_late":
             message = (
                 f"loop late: the robot missed {config.max_late_cycles} periods in a row "

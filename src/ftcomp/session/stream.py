@@ -40,6 +40,7 @@ from ftcomp.hardware.protocols import (
 from ftcomp.hardware.replay import EndOfReplayError
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
+from ftcomp.session.interrupts import InterruptHold
 from ftcomp.session.log import LogObserver, csv_log, save_timing
 from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, StreamLoad, require_tool_weight
 
@@ -312,7 +313,7 @@ def stream(
     )
     lost = sensor if isinstance(sensor, CountsLostPackets) else None
     outcome, message = "duration", ""
-    with csv_log(log_path, columns, observers=observers) as log:
+    with InterruptHold() as hold, csv_log(log_path, columns, observers=observers) as log:
         logger = StreamLogger(
             sensor,
             log.write,
@@ -354,6 +355,7 @@ def stream(
         except FtcompError as exc:
             outcome, message = "error", str(exc)
         finally:
+            hold.finishing(f"finishing the log {log_path}")
             logger.finish()
         t0_ns = logger.t0_ns if logger.t0_ns is not None else 0
         for event in online.events if online is not None else []:  # stamped like the rows
