@@ -11,9 +11,11 @@ from ftcomp.model import GravityModel
 from ftcomp.samples import Samples
 from ftcomp.sim.sensor import SensorSpec, WanderKnots
 
-#: Readings per pose (half a second at the sensor's 1.2 kHz) and the time between poses [s].
+#: Readings per pose (half a second at the sensor's 1.2 kHz) and the time between poses [s]:
+#: a robot-driven ``ftcomp record`` on the twin (``--move-s 1``, 600 readings a pose) took
+#: 1.8-2.0 s a pose (measured under load, docs/calibration.md).
 PER_POSE = 600
-POSE_PERIOD_S = 10.0
+POSE_PERIOD_S = 2.0
 
 
 class RealisticDrift:
@@ -31,8 +33,11 @@ class RealisticDrift:
         return trend + self._wander.at(t)
 
 
-def session(seed: int, poses: int) -> tuple[GravityModel, Samples, RealisticDrift]:
-    """``poses`` poses, one every 10 s from t = 0, each 600 readings at the paper's noise."""
+def session(
+    seed: int, poses: int, pose_period_s: float = POSE_PERIOD_S, t0_s: float = 0.0
+) -> tuple[GravityModel, Samples, RealisticDrift]:
+    """``poses`` poses, one every ``pose_period_s`` from ``t0_s`` (the sensor switched on at
+    t = 0), each 600 readings at the paper's noise."""
     rng = np.random.default_rng(seed)
     drift = RealisticDrift(seed)
     model = truth()
@@ -41,7 +46,8 @@ def session(seed: int, poses: int) -> tuple[GravityModel, Samples, RealisticDrif
         model,
         tilted_poses(rng, poses),
         PER_POSE,
-        pose_period_s=POSE_PERIOD_S,
+        t0_s=t0_s,
+        pose_period_s=pose_period_s,
         rate_hz=1200.0,
         drift=drift,
     )

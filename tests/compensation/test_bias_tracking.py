@@ -33,7 +33,10 @@ def _run(tracker, comp, t, w, R):
 
 
 def test_tracking_keeps_a_calibration_ten_minutes_old_within_twice_the_floor() -> None:
-    model, samples, drift = session(11, 12)
+    # The session 30 min after the sensor was switched on: right after it, the realistic
+    # warm-up moves the z bias by 1.1 N in 10 min, more than the tracker's contact threshold
+    # (docs/calibration.md).
+    model, samples, drift = session(11, 12, t0_s=1800.0)
     result = calibrate_extended(samples, bias_drift="stochastic", leave_one_out=False)
     comp = GravityCompensator(result)
     end = result.bias_drift.t_max_s
