@@ -4,6 +4,7 @@ Run by hand (not a test)::
 
     .venv/bin/python bench/bench_accuracy.py --real DIR [--splits 30]
     .venv/bin/python bench/bench_accuracy.py --sim [--seeds 5]
+    .venv/bin/python bench/bench_accuracy.py --recording SAMPLES.csv [--splits 30]
 
 ``--real DIR``: a directory with ``recorded_messages_pose_100.txt`` (x, y, z, qx, qy, qz, qw:
 the sensor frame in the robot base frame) and ``recorded_messages_wrench_100.txt`` (fx..tz in
@@ -28,6 +29,10 @@ session), in units of one pose mean's noise; ``truth`` is the true tool, tilt an
 trajectory (the floor, measured: about 1), ``drift told`` a constant-bias fit of the readings
 with the true drift subtracted (the tool model's own share); then a calibration used 10 min after
 its session, with and without :class:`~ftcomp.compensation.bias_tracking.BiasTracker`.
+
+``--recording SAMPLES.csv``: a recording with many readings a pose (``ftcomp record`` on
+``ftcomp twin --realistic-drift 1``), random splits of 9 poses to calibrate and the rest held
+out, in units of its floor: one pose mean's noise from the scatter within the poses.
 """
 
 from __future__ import annotations
@@ -177,13 +182,42 @@ def sim_table(seeds: int) -> None:
         )
 
 
+def recording_table(path: Path, splits: int) -> None:
+    """Held-out force error of a recording with many readings a pose (e.g. ``ftcomp record``
+    on ``ftcomp twin --realistic-drift 1``), 9 poses to calibrate, in units of its floor: one
+    pose mean's noise from the scatter within the poses."""
+    from ftcomp.io.samples_csv import read_samples
+
+    samples = read_samples(path)
+    assert samples.pose is not None
+    ids = np.unique(samples.pose)
+    se = [
+        samples.wrench_sensor[samples.pose == i, :3].std(axis=0, ddof=1)
+        / np.sqrt(np.sum(samples.pose == i))
+        for i in ids
+    ]
+    floor = float(np.sqrt(np.mean(np.square(se))))
+    rng = np.random.default_rng(0)
+    draws = [rng.permutation(len(ids)) for _ in range(splits)]
+    print(f"{path}: {len(ids)} poses, floor {floor:.4f} N; 9 poses to calibrate, {splits} splits")
+    for name in ("none", "linear", "stochastic"):
+        v = [held_out_rms(samples, d[:9], d[9:], name)[0] / floor for d in draws]
+        print(
+            f"  {name:10s} {np.median(v):5.2f} (10-90 %: {np.percentile(v, 10):.2f}-"
+            f"{np.percentile(v, 90):.2f})"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--real", type=Path, help="folder with the 100-pose recording")
     parser.add_argument("--splits", type=int, default=30)
     parser.add_argument("--sim", action="store_true")
     parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--recording", type=Path, help="a samples CSV with many readings a pose")
     args = parser.parse_args()
+    if args.recording is not None:
+        recording_table(args.recording, args.splits)
     if args.real is not None:
         real_table(read_real(args.real), args.splits)
     if args.sim:
