@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from calibration.drift_data import NOISE_6
-from calibration.sim_drift_data import PER_POSE, session
+from calibration.sim_drift_data import PER_POSE, session, used_later
 from ftcomp.calibration.identify_extended import calibrate_extended
 from ftcomp.compensation.bias_tracking import BiasTracker, BiasTrackingConfig
 from ftcomp.compensation.compensator import GravityCompensator
@@ -33,29 +33,17 @@ def _run(tracker, comp, t, w, R):
 
 
 def test_tracking_keeps_a_calibration_ten_minutes_old_within_twice_the_floor() -> None:
-    model, samples, drift = session(11, 12)
-    result = calibrate_extended(samples, bias_drift="stochastic", leave_one_out=False)
-    comp = GravityCompensator(result)
-    end = result.bias_drift.t_max_s
-    later = end + 600.0
+    # The session 30 min after the sensor was switched on: right after it, the realistic
+    # warm-up moves the z bias by 1.1 N in 10 min, more than the tracker's contact threshold
+    # (docs/calibration.md).
+    use = used_later(11, 1800.0)
     floor = NOISE_6[0] / np.sqrt(PER_POSE)
-    R = samples.R_base_sensor[0]
-    true_bias = (
-        np.concatenate([model.force_bias_N, model.torque_bias_Nm]) + drift(np.array([later]))[0]
-    )
-    held = np.concatenate([result.model.force_bias_N, result.model.torque_bias_Nm])
-    without = float(np.linalg.norm(held[:3] - true_bias[:3]) / np.sqrt(3))
-    tracker = BiasTracker(BiasTrackingConfig(), initial_std=result.bias_drift.end_std)
-    tracker.update(end, np.zeros(6), R)  # the session's end; the arm busy until 30 s before
-    t, w = _still_cycles(1, model, drift, R, later - 30.0, 30.0)
-    moved = _run(tracker, comp, t, w, R)
-    assert moved.sum() > 0.9 * len(moved)
-    tracked = held + tracker.correction
-    with_tracking = float(np.linalg.norm(tracked[:3] - true_bias[:3]) / np.sqrt(3))
-    assert with_tracking < 2 * floor
-    assert without > 2 * with_tracking  # what 10 minutes of drift does untracked
+    assert use.updates > 0.9 * use.readings
+    assert use.tracked_N < 2 * floor
+    assert use.untracked_N > 2 * use.tracked_N  # what 10 minutes of drift does untracked
     print(
-        f"10 min after: {without / floor:.1f} floors untracked, {with_tracking / floor:.2f} tracked"
+        f"10 min after: {use.untracked_N / floor:.1f} floors untracked, "
+        f"{use.tracked_N / floor:.2f} tracked"
     )
 
 

@@ -13,7 +13,8 @@ the paper's sensor is specified at +-1.5 %) and a slow bias drift, functions of 
 time: a constant rate, a random walk, a smooth wander (a Matérn 3/2 process with a time constant
 of minutes, what a strain-gauge sensor's zero does as its temperature wanders) and a
 temperature-like warm-up trend ``trend * (1 - exp(-t / tau))``. :meth:`SensorSpec.realistic_drift`
-turns on the wander and the trend at magnitudes seen on real sensors; the wander is drawn on a
+turns on the wander and the trend at the sizes and time constants a real ATI Axia80 showed (its
+docstring gives the source); the wander is drawn on a
 grid of knots from its own seeded generator, so the same seed gives the same drift however the
 sensor is read.
 """
@@ -147,15 +148,27 @@ class SensorSpec:
         )
 
     def realistic_drift(self, scale: float = 1.0) -> SensorSpec:
-        """The same sensor with a realistic bias drift: a smooth wander of 0.15 N and 0.003 N*m
-        (time constant 5 min) and a warm-up trend of 0.3 N and 0.005 N*m (time constant
-        30 min), per axis with mixed signs, times ``scale``."""
+        """The same sensor with the bias drift of a real one, times ``scale``: a smooth wander
+        of 0.03-0.05 N and 0.001-0.002 N*m per axis (Matérn 3/2, time constant 10 min) and a
+        warm-up trend that settles by 2.3 N in z, 0.02-0.13 N across, 0.001-0.005 N*m (time
+        constant 15 min, from the sensor's t = 0 as if just switched on).
+
+        Source: the public recording of an ATI Axia80 on an arm
+        (github.com/leledeyuan00/Gravity-Compensation-F-T-sensor, ``datas/``, commit 139efe1;
+        docs/calibration.md). ``--bias-drift stochastic`` on its 100 poses (REML) finds a
+        wander of 0.053, 0.027 N and 0.0009-0.0022 N*m with a time constant of 22.6 poses, and
+        a bias that fell over the session by 2.27 N in z (most of it in the first half), 0.13
+        and 0.02 N across and 0.001-0.005 N*m. The file has no times: the same lab's recording
+        ``GP2025-07-22-22-06-02.txt`` (same sensor, with times) takes a pose every 29.5 s,
+        which makes 22.6 poses about 11 min and the fall about 25 min. ATI's manuals name drift
+        but publish no figure for it.
+        """
         return replace(
             self,
-            bias_wander_std=scale * np.array([0.15, 0.15, 0.2, 0.003, 0.003, 0.002]),
-            bias_wander_time_constant_s=300.0,
-            bias_trend=scale * np.array([0.3, -0.2, 0.4, 0.005, -0.004, 0.002]),
-            bias_trend_time_constant_s=1800.0,
+            bias_wander_std=scale * np.array([0.05, 0.03, 0.05, 0.001, 0.002, 0.0013]),
+            bias_wander_time_constant_s=600.0,
+            bias_trend=scale * np.array([-0.13, -0.02, -2.3, -0.001, -0.001, -0.005]),
+            bias_trend_time_constant_s=900.0,
         )
 
     def ideal(self) -> SensorSpec:

@@ -1,0 +1,95 @@
+"""A stochastic-drift calibration recorded on ``ftcomp twin --realistic-drift 1`` and used
+later with ``stream --track-bias``: the live tracking keeps the contact force at the floor while
+the sensor's warm-up moves the bias away from the calibration's.
+
+A stand-in for "10 minutes after the session": the twin keeps real time, so the stream starts
+20-45 s after the recording ends, at the steepest part of the realistic warm-up
+(the sensor is switched on with the twin: 0.0026 N/s in z, twice its rate 10 minutes later;
+``SensorSpec.realistic_drift``). The offline test (tests/compensation/test_bias_tracking.py)
+covers the full 10 minutes."""
+
+from __future__ import annotations
+
+import csv
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rtde_control")
+pytest.importorskip("pynetft")
+pytest.importorskip("mujoco")
+
+from calibration.drift_data import NOISE_6
+from calibration.sim_drift_data import PER_POSE
+from standins.twin_process import running_twin
+
+CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"
+#: One pose mean's force noise [N]: the floor of a calibration (docs/calibration.md).
+FLOOR_N = float(NOISE_6[0] / np.sqrt(PER_POSE))
+#: The least time from the recording's end to the stream [s] (more under load).
+GAP_S = 20.0
+MOVED = re.compile(r"bias tracking: (\d+) updates, the bias moved by \[(\S+) (\S+) (\S+)\]")
+
+
+def _ftcomp(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-c", CLIENT, *args],
+        capture_output=True,
+        text=True,
+        timeout=120.0,
+        check=False,
+    )
+
+
+def _force_rms_of_mean(rows: list[dict[str, str]]) -> float:
+    """RMS over the force axes of the rows' mean contact force [N]."""
+    mean = np.array([[float(r[k]) for k in ("cfx", "cfy", "cfz")] for r in rows]).mean(axis=0)
+    return float(np.sqrt(np.mean(mean**2)))
+
+
+def test_tracking_holds_a_twin_calibration_at_the_floor_while_the_bias_warms_up(
+    tmp_path: Path,
+) -> None:
+    samples, calibration, log = tmp_path / "s.csv", tmp_path / "cal.json", tmp_path / "log.csv"
+    with running_twin(
+        "twin_bias_tracking", "--realistic-drift", "1", "--tilt-deg=-0.204,-0.129", seconds=600.0
+    ) as twin:
+        robot = f"{twin.robot_uri}?max_speed_mm_s=250&max_accel_mm_s2=1500"
+        done = _ftcomp(
+            "record", "--robot", robot, "--sensor", twin.sensor_uri, "--poses", "paper",
+            "--samples-per-pose", str(PER_POSE), "--move-s", "1", "--position-mm", "450", "0",
+            "420", "-o", str(samples),
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        recorded = time.monotonic()
+        done = _ftcomp(
+            "calibrate", str(samples), "--bias-drift", "stochastic", "-o", str(calibration)
+        )
+        assert done.returncode == 0, done.stderr
+        time.sleep(max(0.0, GAP_S - (time.monotonic() - recorded)))  # the bias moves on
+        done = _ftcomp(
+            "stream", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri,
+            "-c", str(calibration), "--track-bias", "--seconds", "10", "-o", str(log),
+        )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    with log.open() as f:
+        rows = list(csv.DictReader(f))
+    with samples.open() as f:
+        t_end = float(list(csv.DictReader(f))[-1]["t"])
+    gap_s = float(rows[0]["t"]) - t_end
+    untracked = _force_rms_of_mean(rows[:PER_POSE])  # before the first update (0.5 s steady)
+    tracked = _force_rms_of_mean(rows[-PER_POSE:])
+    moved = MOVED.search(done.stdout)
+    assert moved is not None, done.stdout
+    print(
+        f"stream {gap_s:.0f} s after the session: {untracked / FLOOR_N:.1f} floors at its start "
+        f"(untracked), {tracked / FLOOR_N:.2f} after 10 s tracked; {moved[0]}"
+    )
+    assert not any(r["bias_updated"] == "1" for r in rows[: PER_POSE // 2])
+    assert tracked < 2.0 * FLOOR_N
+    assert untracked > 2.0 * tracked
