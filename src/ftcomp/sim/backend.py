@@ -15,8 +15,10 @@ Robot URI options (all optional)::
           &drift_Nm_per_min=X,Y,Z           torque-bias drift rate [N*m/min] (default 0)
           &drift_walk_N=S     force-bias random walk: its std after one minute [N]; the
                               torque walk gets S times the torque/force noise ratio (default 0)
-          &realistic_drift=S  a real sensor's drift times S: a smooth wander (5 min time
-                              constant) and a warm-up trend (30 min), SensorSpec.realistic_drift
+          &realistic_drift=S  a real sensor's drift times S (from a real Axia80's recording):
+                              a smooth wander of 0.03-0.05 N, 0.001-0.002 N*m (10 min time
+                              constant) and a warm-up of 2.3 N in z from switch-on (15 min),
+                              SensorSpec.realistic_drift
                               (default 0: none)
 
 The sensor URI is ``sim://`` with no options: the cell's own sensor, which needs the robot to be
