@@ -10,14 +10,15 @@ import math
 import numpy as np
 import pytest
 
-mujoco = pytest.importorskip("mujoco")
-
 from ftcomp.errors import ParameterError
 from ftcomp.frames import matrix_from_rotvec
-from ftcomp.sim.arm import c4_like_arm, dh_flange_pose, ur5e_arm
-from ftcomp.sim.cell import SimCell
-from ftcomp.sim.scene import NAMES, SceneConfig, build_mjcf
-from ftcomp.sim.tool import LoadSpec
+
+mujoco = pytest.importorskip("mujoco")
+
+from ftcomp.sim.arm import c4_like_arm, dh_flange_pose, ur5e_arm  # noqa: E402
+from ftcomp.sim.cell import SimCell  # noqa: E402
+from ftcomp.sim.scene import NAMES, SceneConfig, build_mjcf  # noqa: E402
+from ftcomp.sim.tool import LoadSpec  # noqa: E402
 
 #: UR's article "DH Parameters for calculations of kinematics and dynamics", UR5e rows:
 #: a [m], d [m], alpha [rad], link mass [kg], centre of mass in the link's DH frame [m].
@@ -100,9 +101,7 @@ def test_a_sensor_offset_on_the_flange_needs_a_dh_arm() -> None:
 
 def test_the_sensor_sits_on_the_flange_at_its_offset() -> None:
     offset_m, rotvec = (0.01, -0.02, 0.15), (0.0, 0.3, 0.5)
-    scene = SceneConfig(
-        arm=ur5e_arm(), p_flange_sensor_m=offset_m, rotvec_flange_sensor_rad=rotvec
-    )
+    scene = SceneConfig(arm=ur5e_arm(), p_flange_sensor_m=offset_m, rotvec_flange_sensor_rad=rotvec)
     cell = SimCell(scene)
     T = ur_dh_product(cell.q_rad)
     p, R = cell.sensor_pose()
@@ -110,9 +109,7 @@ def test_the_sensor_sits_on_the_flange_at_its_offset() -> None:
     np.testing.assert_allclose(R, T[:3, :3] @ matrix_from_rotvec(rotvec), atol=1e-9)
 
 
-def test_the_ur5e_cell_holds_a_load_just_above_the_sponge_and_reaches_the_collection_spot() -> (
-    None
-):
+def test_the_ur5e_cell_holds_a_load_just_above_the_sponge_and_reaches_the_collection_spot() -> None:
     cell = SimCell(SceneConfig(arm=ur5e_arm(), load=LoadSpec(0.5), surface="sponge"))
     p0, R0 = cell.sensor_pose()
     np.testing.assert_allclose(p0, (0.45, 0.0, 0.42), atol=1e-9)  # the home: tool down

@@ -13,7 +13,8 @@ the script's register protocol as ``ur_rtde`` 1.6 uses it, Net F/T HTTP and RDT 
 its bias and buffered mode); the 500 Hz stream; moveL/speedL/servoL/stops as profiles; the
 contact physics of the cell (MuJoCo); the arm, a UR5e from UR's published DH table and link
 masses (:func:`ftcomp.sim.arm.ur5e_arm`), the wrist sensor on its flange where the TCP offset
-puts it. What is not: joint-space moves, force mode and the watchdog are not modelled; ``actual_TCP_force`` and ``ft_raw_wrench`` are the wrist sensor's
+puts it. What is not: the joint servos (stiff PD loops, not UR's), joint-space moves, force
+mode and the watchdog; ``actual_TCP_force`` and ``ft_raw_wrench`` are the wrist sensor's
 readings (the same physics, not a second sensor).
 """
 
