@@ -115,17 +115,7 @@ class ArmSpec:
             value = getattr(self, name)
             if not math.isfinite(value) or value < 0.0:
                 raise ParameterError(f"ArmSpec.{name} must be finite and >= 0, got {value}")
-        for name in (
-            "link_masses_kg",
-            "joint_lower_rad",
-            "joint_upper_rad",
-            "kp",
-            "kv",
-            "armature_kgm2",
-            "home_q_rad",
-        ):
-            freeze_field(self, name, (6,), finite=True)
-        _check_joints_and_gains(self)
+        _freeze_and_check_joints(self)
 
     @property
     def reach_m(self) -> float:
@@ -142,7 +132,22 @@ def c4_like_arm() -> ArmSpec:
     return ArmSpec()
 
 
-def _check_joints_and_gains(arm: ArmSpec | DHArmSpec) -> None:
+#: The fields every arm has per joint, shape (6,).
+_PER_JOINT: Final = (
+    "link_masses_kg",
+    "joint_lower_rad",
+    "joint_upper_rad",
+    "kp",
+    "kv",
+    "armature_kgm2",
+    "home_q_rad",
+)
+
+
+def _freeze_and_check_joints(arm: ArmSpec | DHArmSpec) -> None:
+    """Freeze an arm's per-joint fields and check their ranges (either arm's __post_init__)."""
+    for field_name in _PER_JOINT:
+        freeze_field(arm, field_name, (6,), finite=True)
     name = type(arm).__name__
     if np.any(arm.joint_lower_rad >= arm.joint_upper_rad):
         raise ParameterError(f"{name} joint_lower_rad must be below joint_upper_rad")
@@ -196,24 +201,13 @@ class DHArmSpec:
     def __post_init__(self) -> None:
         if not self.name:
             raise ParameterError("DHArmSpec.name must not be empty")
-        for name in (
-            "dh_a_m",
-            "dh_d_m",
-            "dh_alpha_rad",
-            "link_masses_kg",
-            "joint_lower_rad",
-            "joint_upper_rad",
-            "kp",
-            "kv",
-            "armature_kgm2",
-            "home_q_rad",
-        ):
+        for name in ("dh_a_m", "dh_d_m", "dh_alpha_rad"):
             freeze_field(self, name, (6,), finite=True)
+        _freeze_and_check_joints(self)
         freeze_field(self, "link_com_m", (6, 3), finite=True)
         freeze_field(self, "link_inertia_kgm2", (6, 3), finite=True)
         if np.any(self.link_inertia_kgm2 <= 0.0):
             raise ParameterError("DHArmSpec.link_inertia_kgm2 must be > 0")
-        _check_joints_and_gains(self)
 
     def transforms(self, q_rad: NDArray[np.float64]) -> list[NDArray[np.float64]]:
         """``T_{i-1,i}`` of the six rows at joint positions ``q_rad`` [rad], each (4, 4)."""
