@@ -146,3 +146,13 @@ def test_the_twin_reports_ur_s_forward_kinematics_and_ik_within_the_ur5e_s_reach
     np.testing.assert_allclose(pose[:3], T[:3, 3], atol=1e-7)
     np.testing.assert_allclose(matrix_from_rotvec(pose[3:]), T[:3, :3], atol=1e-7)
     assert within and not beyond
+
+
+def test_the_ur5e_cell_sets_a_half_kilogram_load_down_gently_on_the_sponge() -> None:
+    from ftcomp.session.placement import PlacementConfig, run_placement
+    from ftcomp.sim.placement_cell import SimPlacementCell
+
+    cell = SimPlacementCell("sponge", 0.5, seed=3, arm=ur5e_arm())
+    config = PlacementConfig("admittance", k1_m_per_N=1e-4, k2_m_per_s_N=1e-3)  # the paper's
+    metrics = run_placement(cell, cell.true_tool_model, config).metrics
+    assert metrics["verdict"] == "placed gently", metrics["verdict_reason"]
