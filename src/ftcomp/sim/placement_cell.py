@@ -19,7 +19,7 @@ from ftcomp import paper
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.model import GravityModel
-from ftcomp.sim.arm import ArmModel
+from ftcomp.sim.arm import ArmModel, ArmSpec
 from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, SimCell
 from ftcomp.sim.scene import SceneConfig
 from ftcomp.sim.sensor import SensorSpec
@@ -78,7 +78,7 @@ class SimPlacementCell:
             tilt_V_rad=math.radians(tilt_deg[1]),
             load=load,
             surface=surface,  # type: ignore[arg-type]
-            **({} if arm is None else {"arm": arm}),
+            arm=arm if arm is not None else ArmSpec(),
         )
         self.cell = SimCell(scene, sensor_spec, seed=seed)
         self.identified: Calibration | None = None
