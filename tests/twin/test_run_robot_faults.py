@@ -29,10 +29,13 @@ STOPS = {
     "script-stop": ("the controller refused speedL", 0.0),
 }
 RTDE_STOP_HANGS = pytest.mark.xfail(
-    reason="sometimes (1 run in about 6, under load) ur_rtde's control interface notices the "
-    "silent stream first ('Could not receive data from robot... reconnecting') and its "
-    "reconnect blocks run's speedL for more than the test's 20 s, so URRobot.check never "
-    "runs: a fix for hardware/ur.py (a bounded reconnect, or checking before sending)",
+    reason="ur_rtde 1.6.5 (its source, rtde_control_interface.cpp): run sees the silence and "
+    "stops, but URRobot.stop's speedStop is a blocking command whose sendCommand waits for the "
+    "program's 'done' in a stream that no longer comes (UR_EXECUTION_TIMEOUT, 300 s); 2.5 s "
+    "into the silence the control interface's receive thread reconnects, and reconnect() waits "
+    "for the first package with no time limit. Seen on the UR5e twin under load: 1 run of 3 "
+    "ended in time, 2 hung past the test's 20 s. A fix for hardware/ur.py: "
+    "with the stream stale, stop through the dashboard (stop), not a blocking RTDE command",
     strict=False,
 )
 CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"

@@ -1,4 +1,5 @@
-"""The simulated robot cell on MuJoCo: a six-axis arm, a wrist F/T sensor, a gripper, loads,
+"""The simulated robot cell on MuJoCo: a six-axis arm (the C4-like arm, or the UR5e from its DH
+table: :func:`ur5e_arm`), a wrist F/T sensor, a gripper, loads,
 and a table with a sponge pad or a book.
 
 :class:`SimCell` implements :class:`ftcomp.hardware.protocols.Robot`; ``cell.sensor`` implements
@@ -43,7 +44,7 @@ from ftcomp.extras import require_extra
 
 require_extra("sim", "the simulated cell (ftcomp sim, sim://)")
 
-from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmSpec, c4_like_arm
+from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmSpec, DHArmSpec, c4_like_arm, ur5e_arm
 from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, HOME_Q_RAD, SimCell
 from ftcomp.sim.collect import record_with_truth
 from ftcomp.sim.ik import DifferentialIK, dls_joint_velocity, solve_pose
@@ -61,6 +62,7 @@ __all__ = [
     "SURFACE_KINDS",
     "ArmSpec",
     "BookSpec",
+    "DHArmSpec",
     "DifferentialIK",
     "LoadSpec",
     "SceneConfig",
@@ -79,4 +81,5 @@ __all__ = [
     "record_with_truth",
     "solve_pose",
     "table4_loads",
+    "ur5e_arm",
 ]

@@ -59,7 +59,8 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         sensor_spec: the F/T sensor model. Default: the paper's sensor.
         seed: seeds the sensor noise; the same seed and calls give the same readings.
         control_period_s: control cycle [s] (1 ms); a whole multiple of the physics step.
-        q_start_rad: initial joint positions [rad], shape (6,); default :data:`HOME_Q_RAD`.
+        q_start_rad: initial joint positions [rad], shape (6,); default: the arm's
+            ``home_q_rad`` (:data:`HOME_Q_RAD` for the C4-like arm).
     """
 
     def __init__(
@@ -117,7 +118,9 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         self._R6_world_base = np.kron(np.eye(2), self._R_world_base)
         self._gravity = float(np.linalg.norm(m.opt.gravity))
 
-        q0 = np.array(HOME_Q_RAD if q_start_rad is None else q_start_rad, dtype=float)
+        q0 = np.array(
+            self._config.arm.home_q_rad if q_start_rad is None else q_start_rad, dtype=float
+        )
         self._check_joints(q0, "q_start_rad")
         self._q_cmd = q0.copy()
         self._qd_cmd = np.zeros(6)

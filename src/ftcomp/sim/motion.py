@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
 
 import mujoco
 import numpy as np
@@ -17,13 +17,17 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import ParameterError, UnreachablePoseError
+from ftcomp.sim.arm import C4_HOME_Q_RAD
 from ftcomp.sim.ik import solve_pose
+
+if TYPE_CHECKING:
+    from ftcomp.sim.scene import SceneConfig
 
 __all__ = ["HOME_Q_RAD", "ArmMotion", "CycleCallback"]
 
-#: Start configuration: tool pointing straight down in front of the robot [rad]; also the
-#: second seed of every IK solve.
-HOME_Q_RAD: Final = (0.0, 0.0, 0.6, 0.0, math.pi / 2 - 0.6, 0.0)
+#: The C4-like arm's start configuration: tool pointing straight down in front of the robot
+#: [rad]. A cell starts at its arm's ``home_q_rad``, also the second seed of every IK solve.
+HOME_Q_RAD: Final = C4_HOME_Q_RAD
 
 #: Seeds the random IK starts of a reachability check (its own generator, so a check does not
 #: change the starts of later moves).
@@ -44,6 +48,7 @@ class ArmMotion:
     """Blocking joint and Cartesian moves of the simulated arm (see the module docstring)."""
 
     # Set by SimCell.__init__.
+    _config: SceneConfig
     _model: mujoco.MjModel
     _data: mujoco.MjData
     _scratch: mujoco.MjData
@@ -174,7 +179,7 @@ class ArmMotion:
         Rwb = self._R_world_base
         span = self._upper - self._lower
         draw = self._ik_rng if rng is None else rng
-        seeds = [self._q_cmd, np.array(HOME_Q_RAD)]
+        seeds = [self._q_cmd, np.array(self._config.arm.home_q_rad)]
         seeds += [self._lower + span * draw.random(6) for _ in range(30)]
         mujoco.mj_copyData(self._scratch, self._model, self._data)
         q = solve_pose(

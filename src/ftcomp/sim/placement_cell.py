@@ -19,6 +19,7 @@ from ftcomp import paper
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.model import GravityModel
+from ftcomp.sim.arm import ArmModel, ArmSpec
 from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, SimCell
 from ftcomp.sim.scene import SceneConfig
 from ftcomp.sim.sensor import SensorSpec
@@ -45,6 +46,7 @@ class SimPlacementCell:
         identify_samples_per_pose: if given, first identify the empty gripper on this cell at
             the paper's nine poses with this many readings each (joint method); the result is
             :attr:`identified`.
+        arm: the arm (default: the C4-like arm; :func:`~ftcomp.sim.arm.ur5e_arm`, the twin's).
 
     Attributes:
         cell: the underlying :class:`~ftcomp.sim.cell.SimCell`.
@@ -63,6 +65,7 @@ class SimPlacementCell:
         tilt_deg: tuple[float, float] = paper.TILT_DEG,
         sensor_spec: SensorSpec | None = None,
         identify_samples_per_pose: int | None = None,
+        arm: ArmModel | None = None,
     ) -> None:
         if surface not in PLACEMENT_SURFACES:
             raise ParameterError(f"surface must be 'sponge' or 'book', got {surface!r}")
@@ -75,6 +78,7 @@ class SimPlacementCell:
             tilt_V_rad=math.radians(tilt_deg[1]),
             load=load,
             surface=surface,  # type: ignore[arg-type]
+            arm=arm if arm is not None else ArmSpec(),
         )
         self.cell = SimCell(scene, sensor_spec, seed=seed)
         self.identified: Calibration | None = None

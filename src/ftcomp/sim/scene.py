@@ -5,6 +5,12 @@ mounted with ``R_world_base = Rx(U) @ Ry(V)`` (paper Eq. 1), so a tilt changes w
 in the base frame, exactly as a tilted mount does. The sensor frame is the site ``ft_site`` at the
 origin of the ``sensing_end`` body, z along the tool axis away from the flange.
 
+The arm is either the C4-like arm (:class:`~ftcomp.sim.arm.ArmSpec`) or an arm given by its DH
+table (:class:`~ftcomp.sim.arm.DHArmSpec`, the UR5e): then the body of link ``i`` is DH frame
+``i`` (its joint turns about ``z_{i-1}``, through frame ``i-1``'s origin), so MuJoCo's forward
+kinematics is the DH product and ``link6`` is the tool flange; the sensor sits on that flange at
+``SceneConfig.p_flange_sensor_m`` / ``rotvec_flange_sensor_rad``.
+
 The arm comes first in the tree, so its joints are MuJoCo's degrees of freedom 0-5.
 The subtree below the sensor is exactly ``sensing_end`` (+ ``gripper``); both are welded to their
 parent (no joints, no actuators), so MuJoCo's force/torque sensors at ``ft_site`` measure their
@@ -23,7 +29,7 @@ from scipy.spatial.transform import Rotation
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 from ftcomp.frames import R_world_base_from_tilt
-from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmSpec
+from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmModel, ArmSpec, DHArmSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS, BookSpec, SpongeSpec, SurfaceKind, TableSpec
 from ftcomp.sim.tool import LoadSpec, ToolSpec
 
@@ -68,7 +74,13 @@ class SceneConfig:
             no-gripper calibration).
         load: the graspable load in the scene, or None.
         surface: ``"none"``, ``"sponge"`` or ``"book"`` on the table (the table is always there).
-        arm, tool, table, sponge, book: the parts' specifications.
+        arm, tool, table, sponge, book: the parts' specifications (``arm``: the C4-like
+            :class:`~ftcomp.sim.arm.ArmSpec` or a :class:`~ftcomp.sim.arm.DHArmSpec`).
+        p_flange_sensor_m: with a DH arm, the sensor frame's origin in the flange frame (DH
+            frame 6) [m], (3,); the sensor's housing lies behind it. Zero with the C4-like arm
+            (its sensor sits on its flange, z along the flange's x).
+        rotvec_flange_sensor_rad: with a DH arm, the sensor frame's axes in the flange frame,
+            a rotation vector [rad], (3,).
         timestep_s: physics step [s]; the cell's control period must be a whole multiple.
         noslip_iterations: MuJoCo no-slip solver iterations (stops a held contact from creeping).
         integrator: MuJoCo's integrator. ``"implicitfast"`` (default) is the most stable with
@@ -82,7 +94,7 @@ class SceneConfig:
     gripper: bool = True
     load: LoadSpec | None = None
     surface: SurfaceKind = "none"
-    arm: ArmSpec = field(default_factory=ArmSpec)
+    arm: ArmModel = field(default_factory=ArmSpec)
     tool: ToolSpec = field(default_factory=ToolSpec)
     table: TableSpec = field(default_factory=TableSpec)
     sponge: SpongeSpec = field(default_factory=SpongeSpec)
@@ -90,8 +102,20 @@ class SceneConfig:
     timestep_s: float = 0.001
     noslip_iterations: int = 2
     integrator: str = "implicitfast"
+    p_flange_sensor_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rotvec_flange_sensor_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
+        for name in ("p_flange_sensor_m", "rotvec_flange_sensor_rad"):
+            value = tuple(float(v) for v in getattr(self, name))
+            if len(value) != 3 or not all(math.isfinite(v) for v in value):
+                raise ParameterError(f"SceneConfig.{name} must be 3 finite numbers")
+            if any(value) and not isinstance(self.arm, DHArmSpec):
+                raise ParameterError(f"SceneConfig.{name} needs an arm given by a DH table")
+        if max(map(abs, self.p_flange_sensor_m)) > 0.5:
+            raise ParameterError("SceneConfig.p_flange_sensor_m must be within 0.5 m per axis")
+        if math.hypot(*self.rotvec_flange_sensor_rad) > math.pi:
+            raise ParameterError("SceneConfig.rotvec_flange_sensor_rad must have norm <= pi")
         for name in ("tilt_U_rad", "tilt_V_rad"):
             value = getattr(self, name)
             if not math.isfinite(value) or abs(value) >= math.radians(30.0):
@@ -139,16 +163,45 @@ def _box_inertia(mass: float, half: np.ndarray) -> np.ndarray:
     return mass / 12.0 * np.array([b + c, a + c, a + b])
 
 
-def _arm_xml(arm: ArmSpec, tool_xml: str) -> str:
+_ARM_GEOM: Final = 'contype="0" conaffinity="0" rgba="0.85 0.85 0.9 1"'
+
+
+def _joint_xml(arm: ArmModel, i: int, axis: str, pos: str = "0 0 0") -> str:
+    lo, hi = arm.joint_lower_rad[i], arm.joint_upper_rad[i]
+    return (
+        f'<joint name="{ARM_JOINT_NAMES[i]}" pos="{pos}" axis="{axis}" range="{_f([lo, hi])}" '
+        f'armature="{arm.armature_kgm2[i]:.12g}"/>'
+    )
+
+
+def _dh_arm_xml(arm: DHArmSpec, tool_xml: str) -> str:
+    """Link ``i``'s body at DH frame ``i``: placed ``Tz(d) Tx(a) Rx(alpha)`` in frame ``i-1``
+    (at q = 0), its joint about ``z_{i-1}`` through frame ``i-1``'s origin, both given in frame
+    ``i``: the axis ``Rx(alpha)^T e_z`` and the point ``-Rx(alpha)^T (a, 0, d)``."""
+    xml = tool_xml
+    for i in reversed(range(6)):
+        a, d, alpha = arm.dh_a_m[i], arm.dh_d_m[i], arm.dh_alpha_rad[i]
+        ca, sa = math.cos(alpha), math.sin(alpha)
+        joint_pos = np.array([-a, -sa * d, -ca * d])
+        quat = _wxyz(Rotation.from_rotvec([alpha, 0.0, 0.0]))
+        xml = f"""
+        <body name="link{i + 1}" pos="{_f([a, 0.0, d])}" quat="{quat}">
+          {_joint_xml(arm, i, _f([0.0, sa, ca]), _f(joint_pos))}
+          <inertial pos="{_f(arm.link_com_m[i])}" mass="{arm.link_masses_kg[i]:.17g}"
+                    diaginertia="{_f(arm.link_inertia_kgm2[i])}"/>
+          <geom type="capsule" fromto="{_f(joint_pos)} 0 0 0" size="0.045" {_ARM_GEOM}/>{xml}
+        </body>"""
+    return xml
+
+
+def _arm_xml(arm: ArmModel, tool_xml: str) -> str:
+    if isinstance(arm, DHArmSpec):
+        return _dh_arm_xml(arm, tool_xml)
     m = arm.link_masses_kg
-    lo, hi = arm.joint_lower_rad, arm.joint_upper_rad
-    arm_geom = 'contype="0" conaffinity="0" rgba="0.85 0.85 0.9 1"'
+    arm_geom = _ARM_GEOM
 
     def joint(i: int, axis: str) -> str:
-        return (
-            f'<joint name="{ARM_JOINT_NAMES[i]}" axis="{axis}" range="{_f([lo[i], hi[i]])}" '
-            f'armature="{arm.armature_kgm2[i]:.12g}"/>'
-        )
+        return _joint_xml(arm, i, axis)
 
     h, s, u, e, f, w = (
         arm.base_height_m,
@@ -213,11 +266,17 @@ def _tool_xml(config: SceneConfig) -> str:
                     size="0.005 0.012 {fl / 2:.6g}" {grey}/>
               <site name="grasp_site" pos="{_f(tool.grasp_point_m)}" size="0.005"/>
             </body>"""
-    # Sensor frame = flange frame turned so that its z is the flange's x (the tool axis).
-    R_flange_sensor = Rotation.from_euler("y", 90.0, degrees=True)
     hh = _HOUSING_HALF_HEIGHT_M
+    if isinstance(config.arm, DHArmSpec):
+        # The sensor frame where the config puts it, its housing just behind it.
+        R_flange_sensor = Rotation.from_rotvec(config.rotvec_flange_sensor_rad)
+        housing_pos = np.asarray(config.p_flange_sensor_m) - R_flange_sensor.apply([0, 0, 2 * hh])
+    else:
+        # Sensor frame = flange frame turned so that its z is the flange's x (the tool axis).
+        R_flange_sensor = Rotation.from_euler("y", 90.0, degrees=True)
+        housing_pos = np.zeros(3)
     return f"""
-          <body name="sensor_housing" quat="{_wxyz(R_flange_sensor)}">
+          <body name="sensor_housing" pos="{_f(housing_pos)}" quat="{_wxyz(R_flange_sensor)}">
             <inertial pos="0 0 {hh:.6g}" mass="{_HOUSING_MASS_KG:.6g}"
                       diaginertia="1e-4 1e-4 1e-4"/>
             <geom type="cylinder" pos="0 0 {hh:.6g}" size="0.04 {hh:.6g}"

@@ -11,9 +11,10 @@ nothing else: the robot's (RTDE 30004, dashboard 29999, script 30001-30003) and 
 What is faithful: the wire protocols (RTDE v2 with its real types, the dashboard's answers,
 the script's register protocol as ``ur_rtde`` 1.6 uses it, Net F/T HTTP and RDT with
 its bias and buffered mode); the 500 Hz stream; moveL/speedL/servoL/stops as profiles; the
-contact physics of the cell (MuJoCo). What is not: the arm is the cell's six-axis arm
-(:mod:`ftcomp.sim.arm`), not UR5e's kinematics and masses; joint-space moves, force mode and the
-watchdog are not modelled; ``actual_TCP_force`` and ``ft_raw_wrench`` are the wrist sensor's
+contact physics of the cell (MuJoCo); the arm, a UR5e from UR's published DH table and link
+masses (:func:`ftcomp.sim.arm.ur5e_arm`), the wrist sensor on its flange where the TCP offset
+puts it. What is not: the joint servos (stiff PD loops, not UR's), joint-space moves, force
+mode and the watchdog; ``actual_TCP_force`` and ``ft_raw_wrench`` are the wrist sensor's
 readings (the same physics, not a second sensor).
 """
 
@@ -45,11 +46,13 @@ from ftcomp.hardware.registry import parse_uri
 from ftcomp.io.atomic import atomic_output, atomic_write_text
 from ftcomp.io.truth_json import truth_document
 from ftcomp.session.log import LogObserver, ObserverThread
-from ftcomp.sim.backend import MAX_LOAD_KG
-from ftcomp.sim.backend import open_robot as open_sim_robot
-from ftcomp.sim.cell import SimCell
+from ftcomp.sim.arm import ur5e_arm
+from ftcomp.sim.backend import MAX_LOAD_KG, sensor_spec_from_uri
+from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, SimCell
+from ftcomp.sim.scene import SceneConfig
 from ftcomp.sim.sensor import SensorSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS
+from ftcomp.sim.tool import LoadSpec
 from ftcomp.twin.controller import UrController
 from ftcomp.twin.netft import (
     COUNTS_PER_FORCE,
@@ -124,9 +127,11 @@ class TwinConfig:
         fault_at_s: when, after the first RTDE client started streaming [s].
         realtime: ask for SCHED_FIFO for the loop and the Net F/T's sender (as ur_rtde does).
         tcp_offset_mm: the controller's TCP offset, the TCP origin in the flange frame [mm]
-            (PolyScope's Installation > TCP). The TCP is the wrist sensor's frame, so the
-            flange sits behind it by this offset; ``actual_TCP_force`` is reported about that
-            flange origin and ``ft_raw_wrench`` in that flange frame, as an e-Series does.
+            (PolyScope's Installation > TCP). The TCP is the wrist sensor's frame: the cell
+            mounts the sensor on the UR5e's flange (DH frame 6) at this offset, so
+            ``actual_TCP_pose`` is the flange's pose (UR's DH forward kinematics) times it,
+            ``actual_TCP_force`` is reported about the flange origin and ``ft_raw_wrench`` in
+            the flange frame, as an e-Series does.
         tcp_rotvec_rad: the TCP offset's rotation (TCP axes in the flange frame), a rotation
             vector [rad].
     """
@@ -203,7 +208,8 @@ class TwinConfig:
             )
 
     def sim_uri(self) -> str:
-        """The ``sim://`` URI of the cell this twin serves."""
+        """The ``sim://`` URI of the cell this twin serves, but for the arm (a ``sim://``
+        cell carries the C4-like arm, the twin the UR5e: :meth:`open_cell`)."""
         parts = [f"tilt_deg={self.tilt_deg[0]:g},{self.tilt_deg[1]:g}", f"seed={self.seed}"]
         if self.load_kg is not None:
             parts += [f"load_kg={self.load_kg:g}", "grasp=1"]
@@ -217,6 +223,32 @@ class TwinConfig:
         if any(self.drift_N_per_min):
             parts.append("drift_N_per_min=" + ",".join(f"{v:g}" for v in self.drift_N_per_min))
         return "sim://?" + "&".join(parts)
+
+    def open_cell(self) -> SimCell:
+        """The cell this twin serves: the UR5e with the wrist sensor at the TCP offset, the
+        sensor's realism, and a load grasped (held ``clearance_mm`` above a surface)."""
+        spec = sensor_spec_from_uri(parse_uri(self.sim_uri()))
+        scene = SceneConfig(
+            tilt_U_rad=math.radians(self.tilt_deg[0]),
+            tilt_V_rad=math.radians(self.tilt_deg[1]),
+            load=LoadSpec(self.load_kg) if self.load_kg is not None else None,
+            surface=self.surface,  # type: ignore[arg-type]
+            arm=ur5e_arm(),
+            p_flange_sensor_m=tuple(v * 1e-3 for v in self.tcp_offset_mm),  # type: ignore[arg-type]
+            rotvec_flange_sensor_rad=self.tcp_rotvec_rad,
+        )
+        cell = SimCell(scene, spec, seed=self.seed)
+        if any(self.tcp_offset_mm) or any(self.tcp_rotvec_rad):
+            # The sensor (the TCP) at the start pose whatever the offset: tool down in front.
+            cell.move_pose(COLLECTION_POSITION_BASE_M, np.diag([1.0, -1.0, -1.0]), 0.5)
+        if self.load_kg is not None:
+            clearance_m = self.clearance_mm * 1e-3
+            if self.surface != "none":  # grasp 20 mm up (empty on the way), then lower
+                cell.hold_above_surface(max(clearance_m, 0.02), 0.5)
+            cell.grasp()
+            if self.surface != "none":
+                cell.hold_above_surface(clearance_m, 0.3)
+        return cell
 
 
 @dataclass(frozen=True)
@@ -552,8 +584,7 @@ def serve_twin(
     # The loop, the RDT sender and the RTDE sessions share the interpreter: hand it over
     # every 0.2 ms (Python's default, 5 ms, would hold a sender back by whole periods).
     sys.setswitchinterval(2e-4)
-    cell = open_sim_robot(parse_uri(config.sim_uri()))
-    assert isinstance(cell, SimCell)
+    cell = config.open_cell()
     with _bound(config) as ports:
         netft = NetFtProcess(config.sensor_host, SensorSpec().output_rate_Hz, config.realtime)
         twin = _Twin(config, cell, ports, netft)
