@@ -79,8 +79,9 @@ def register(parser: argparse.ArgumentParser) -> None:
         type=float,
         default=0.0,
         metavar="SCALE",
-        help="a real sensor's bias drift times SCALE: a wander of 0.15-0.2 N over minutes and a "
-        "warm-up of 0.2-0.4 N over half an hour (default 0: none)",
+        help="a real sensor's bias drift times SCALE (from a real Axia80's recording): a wander "
+        "of 0.03-0.05 N over ten minutes and a warm-up of 2.3 N in z over the quarter hour "
+        "after the twin starts (default 0: none)",
     )
     parser.add_argument(
         "--truth",
