@@ -174,12 +174,16 @@ def run_loop(
     sinks: Sequence[Sink] = (),
     max_cycles: int | None = None,
     timing: LoopTiming | None = None,
+    in_slack: Sequence[Callable[[], None]] = (),
 ) -> LoopStats:
     """Run cycles until ``step`` returns None (or ``max_cycles``); stop the robot on any exit.
 
     Each cycle: ``reading = cycle.read()``, ``twist = step(reading)``, every sink
-    ``sink(reading, twist)``, ``cycle.command(twist)``, ``cycle.advance()``. When the step
-    returns None the sinks do not run and nothing is commanded.
+    ``sink(reading, twist)``, ``cycle.command(twist)``, every ``in_slack()``,
+    ``cycle.advance()``. When the step returns None the sinks do not run and nothing is
+    commanded. ``in_slack`` is work the cycle owes but the command need not wait for (a log
+    row's formatting, :meth:`~ftcomp.session.log.CsvLog.write_later`): it runs after the
+    command has been sent, in the period's slack.
 
     Every cycle is timed (``timing``, or a :class:`~ftcomp.control.timing.LoopTiming` of the
     robot's period, paced when the robot is on the host's clock): pass one to keep its figures
@@ -217,6 +221,8 @@ def run_loop(
                     sink(reading, twist)
                 cycle.command(twist, reading)
                 timing.sent(robot.now_ns() - reading.t_sample_ns)
+                for later in in_slack:
+                    later()
                 if paced:
                     _collect_in_slack()
                 cycle.advance()
