@@ -22,6 +22,7 @@ is late too often is a fault for the caller to act on (:attr:`RateLimiter.late_i
 from __future__ import annotations
 
 import gc
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -157,6 +158,10 @@ class LoopStats:
     timing: TimingSummary
 
 
+#: A paced loop's pause between its set-up and its first cycle [s].
+_AFTER_SETUP_S = 0.01
+
+
 def _collect_in_slack() -> None:
     """The collection the interpreter would have started by itself (its thresholds), run after
     the cycle's command has been sent instead of in the middle of a cycle."""
@@ -211,6 +216,11 @@ def run_loop(
         gc.disable()  # collected in the slack instead (_collect_in_slack)
     try:
         with realtime_loop(realtime=timing.paced) as timing.realtime:
+            if paced:
+                # The device clients' readers deliver what arrived while the set-up (the
+                # collection above: 50-80 ms) held the interpreter's lock: the first cycle's
+                # reading was once older than the stale limit, a healthy stream stopped.
+                time.sleep(_AFTER_SETUP_S)
             while max_cycles is None or n < max_cycles:
                 timing.start()
                 reading = cycle.read()
