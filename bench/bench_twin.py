@@ -97,9 +97,10 @@ def main() -> None:
         f"(goal 500 +- 1); gap p50 {np.percentile(gaps_ms, 50):.2f} ms, "
         f"p99 {np.percentile(gaps_ms, 99):.2f} ms, max {gaps_ms.max():.2f} ms"
     )
-    if final:
-        print(final[-1])
-        words = final[-1].split()
+    served = next((line for line in final if line.startswith("twin served")), "")
+    if served:  # the step in us (the timing line after it gives ms)
+        print(served)
+        words = served.split()
         try:
             p50 = float(words[words.index("p50") + 1])
             p99 = float(words[words.index("p99") + 1])

@@ -58,3 +58,18 @@ def test_timing_refuses_a_period_that_is_not_positive() -> None:
         LoopTiming(0.0)
     with pytest.raises(ParameterError, match="cycles must be an integer >= 0"):
         TimingSummary(0.001, True, -1, 0, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def test_cpu_time_is_kept_beside_compute_so_time_off_the_cpu_shows() -> None:
+    clock, cpu = _Clock(), _Clock()
+    timing = LoopTiming(0.002, clock_ns=clock, cpu_clock_ns=cpu)
+    for k in range(10):
+        clock.now_ns = k * 2_000_000
+        timing.start()
+        clock.now_ns += 500_000  # 0.5 ms from start to command sent ...
+        cpu.now_ns += 200_000  # ... of which 0.2 ms on the CPU (0.3 ms preempted)
+        timing.sent()
+    s = timing.summary()
+    assert s.compute_p50_s == pytest.approx(0.000501)
+    assert s.cpu_p50_s == pytest.approx(0.000201) and s.cpu_p99_s == pytest.approx(0.000201)
+    assert "compute p50 0.50 p99 0.50 max 0.50 ms (cpu p50 0.20 p99 0.20)" in s.line()

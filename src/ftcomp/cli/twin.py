@@ -3,7 +3,7 @@
 ``ftcomp twin --robot-host 127.0.0.N --sensor-host 127.0.0.M [--seconds S] [--load-kg X
 --surface sponge|book|none --clearance-mm C] [--tilt-deg U,V] [--truth truth.json]
 [--contact-log contact.csv] [--fault NAME --fault-at-s T] [--tcp-offset-mm X,Y,Z
---tcp-rotvec-rad RX,RY,RZ] [--view HOST:PORT]``
+--tcp-rotvec-rad RX,RY,RZ] [--sensor-rate-hz R] [--view HOST:PORT]``
 
 The robot answers RTDE (30004, 500 Hz), the dashboard (29999) and the script ports
 (30001-30003) on the robot host, as ``ur_rtde``'s ``RTDEControlInterface`` and
@@ -112,6 +112,15 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="the TCP offset's rotation RX,RY,RZ [rad] (default 0,0,0)",
     )
     parser.add_argument(
+        "--sensor-rate-hz",
+        type=float,
+        default=1200.0,
+        metavar="R",
+        help="the Net F/T's RDT output rate [Hz]: records sent evenly at R, each a fresh "
+        "sample; a real Net F/T streams at up to 7000 Hz (up to 7000; default 1200, the "
+        "simulated sensor's rate)",
+    )
+    parser.add_argument(
         "--view",
         type=view_address,
         metavar="HOST:PORT",
@@ -149,6 +158,7 @@ def run(args: argparse.Namespace) -> int:
         drift_N_per_min=(drift[0], drift[1], drift[2]),
         truth_path=Path(args.truth) if args.truth else None,
         contact_log_path=Path(args.contact_log) if args.contact_log else None,
+        sensor_rate_hz=args.sensor_rate_hz,
         fault=args.fault,
         fault_at_s=args.fault_at_s,
         realtime=not args.no_realtime,

@@ -22,6 +22,7 @@ is late too often is a fault for the caller to act on (:attr:`RateLimiter.late_i
 from __future__ import annotations
 
 import gc
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -157,6 +158,10 @@ class LoopStats:
     timing: TimingSummary
 
 
+#: A paced loop's pause between its set-up and its first cycle [s].
+_AFTER_SETUP_S = 0.01
+
+
 def _collect_in_slack() -> None:
     """The collection the interpreter would have started by itself (its thresholds), run after
     the cycle's command has been sent instead of in the middle of a cycle."""
@@ -174,12 +179,16 @@ def run_loop(
     sinks: Sequence[Sink] = (),
     max_cycles: int | None = None,
     timing: LoopTiming | None = None,
+    in_slack: Sequence[Callable[[], None]] = (),
 ) -> LoopStats:
     """Run cycles until ``step`` returns None (or ``max_cycles``); stop the robot on any exit.
 
     Each cycle: ``reading = cycle.read()``, ``twist = step(reading)``, every sink
-    ``sink(reading, twist)``, ``cycle.command(twist)``, ``cycle.advance()``. When the step
-    returns None the sinks do not run and nothing is commanded.
+    ``sink(reading, twist)``, ``cycle.command(twist)``, every ``in_slack()``,
+    ``cycle.advance()``. When the step returns None the sinks do not run and nothing is
+    commanded. ``in_slack`` is work the cycle owes but the command need not wait for (a log
+    row's formatting, :meth:`~ftcomp.session.log.CsvLog.write_later`): it runs after the
+    command has been sent, in the period's slack.
 
     Every cycle is timed (``timing``, or a :class:`~ftcomp.control.timing.LoopTiming` of the
     robot's period, paced when the robot is on the host's clock): pass one to keep its figures
@@ -207,6 +216,11 @@ def run_loop(
         gc.disable()  # collected in the slack instead (_collect_in_slack)
     try:
         with realtime_loop(realtime=timing.paced) as timing.realtime:
+            if paced:
+                # The device clients' readers deliver what arrived while the set-up (the
+                # collection above: 50-80 ms) held the interpreter's lock: the first cycle's
+                # reading was once older than the stale limit, a healthy stream stopped.
+                time.sleep(_AFTER_SETUP_S)
             while max_cycles is None or n < max_cycles:
                 timing.start()
                 reading = cycle.read()
@@ -217,6 +231,8 @@ def run_loop(
                     sink(reading, twist)
                 cycle.command(twist, reading)
                 timing.sent(robot.now_ns() - reading.t_sample_ns)
+                for later in in_slack:
+                    later()
                 if paced:
                     _collect_in_slack()
                 cycle.advance()

@@ -8,7 +8,9 @@ without allocating per cycle (counts in preallocated 1 us histograms, a few inte
   RateLimiter` does). A cycle that starts a whole period or more late has *missed* periods
   (``lateness // period`` of them) and is logged with its lateness in ms;
 - **compute time**: from the cycle's start to its command sent (read, compensate, step, log row,
-  command), what the period must hold;
+  command), what the period must hold; beside it the loop thread's **CPU time** over the same
+  span (:func:`time.thread_time_ns`): compute minus CPU is time the thread was off the CPU
+  (preempted by a higher priority, or waiting for the interpreter's lock);
 - **sensor age at use**: from the wrench sample's stamp (a Net F/T packet's arrival on the host
   clock) to the command that used it, on the robot's clock.
 
@@ -56,6 +58,8 @@ class TimingSummary:
         compute_p50_s, compute_p99_s, compute_max_s: compute time [s].
         age_p50_s, age_p99_s, age_max_s: sensor age at use [s] (NaN: no sample stamps).
         realtime: whether the loop ran with real-time scheduling.
+        cpu_p50_s, cpu_p99_s: the loop thread's CPU time over the compute span [s] (NaN: not
+            measured).
     """
 
     period_s: float
@@ -74,6 +78,8 @@ class TimingSummary:
     age_p99_s: float
     age_max_s: float
     realtime: bool = False
+    cpu_p50_s: float = math.nan
+    cpu_p99_s: float = math.nan
 
     def __post_init__(self) -> None:
         if not self.period_s > 0.0:
@@ -104,7 +110,13 @@ class TimingSummary:
             )
         text += (
             f"; compute p50 {ms(self.compute_p50_s)} p99 {ms(self.compute_p99_s)} "
-            f"max {ms(self.compute_max_s)} ms; sensor age p50 {ms(self.age_p50_s)} "
+            f"max {ms(self.compute_max_s)} ms"
+            + (
+                ""
+                if math.isnan(self.cpu_p50_s)
+                else f" (cpu p50 {ms(self.cpu_p50_s)} p99 {ms(self.cpu_p99_s)})"
+            )
+            + f"; sensor age p50 {ms(self.age_p50_s)} "
             f"p99 {ms(self.age_p99_s)} max {ms(self.age_max_s)} ms"
         )
         if self.paced:
@@ -140,6 +152,7 @@ class LoopTiming:
         paced: judge start lateness (a loop on wall-clock time).
         name: names the loop in the log message of a late cycle.
         clock_ns: the time source of lateness and compute time [ns] (for tests).
+        cpu_clock_ns: the calling thread's CPU time [ns] (for tests).
     """
 
     def __init__(
@@ -149,6 +162,7 @@ class LoopTiming:
         paced: bool = True,
         name: str = "control loop",
         clock_ns: Callable[[], int] = time.perf_counter_ns,
+        cpu_clock_ns: Callable[[], int] = time.thread_time_ns,
     ) -> None:
         if not (math.isfinite(period_s) and period_s > 0.0):
             raise ParameterError(f"period_s must be > 0 s, got {period_s}")
@@ -158,8 +172,10 @@ class LoopTiming:
         self.realtime = False
         self.name = name
         self._clock = clock_ns
+        self._cpu_clock = cpu_clock_ns
         self._period_ns = round(period_s * 1e9)
         self._compute = np.zeros(_BINS + 1, dtype=np.int64)
+        self._cpu = np.zeros(_BINS + 1, dtype=np.int64)
         self._age = np.zeros(_BINS + 1, dtype=np.int64)
         self._late = np.zeros(_BINS + 1, dtype=np.int64)
         self.cycles = 0
@@ -170,6 +186,7 @@ class LoopTiming:
         self.late_in_a_row = 0
         self.worst_late_in_a_row = 0
         self._start_ns = 0
+        self._start_cpu_ns = 0
         self._due_ns: int | None = None
         self._last_start_ns: int | None = None
         self._worst_gap_ns = 0
@@ -179,6 +196,7 @@ class LoopTiming:
 
     def start(self) -> None:
         """A cycle starts now: judge its lateness (a missed period is logged)."""
+        self._start_cpu_ns = self._cpu_clock()
         now = self._clock()
         self._start_ns = now
         if not self.paced:
@@ -221,8 +239,10 @@ class LoopTiming:
         """The cycle's command has been sent; ``sensor_age_ns``: the robot's clock now minus the
         sample's stamp [ns] (None: not known)."""
         compute = self._clock() - self._start_ns
+        cpu = self._cpu_clock() - self._start_cpu_ns
         self.cycles += 1
         self._compute[min(compute // 1000, _BINS)] += 1
+        self._cpu[min(max(cpu, 0) // 1000, _BINS)] += 1
         if compute > self._max_compute_ns:
             self._max_compute_ns = compute
         if sensor_age_ns is not None:
@@ -252,4 +272,6 @@ class LoopTiming:
             age_p99_s=_percentile_s(self._age, 0.99, self.aged),
             age_max_s=self._max_age_ns * 1e-9 if self.aged else math.nan,
             realtime=self.realtime,
+            cpu_p50_s=_percentile_s(self._cpu, 0.5, n),
+            cpu_p99_s=_percentile_s(self._cpu, 0.99, n),
         )

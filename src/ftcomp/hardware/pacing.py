@@ -44,9 +44,9 @@ __all__ = [
     "realtime_loop",
 ]
 
-#: The SCHED_FIFO priority a live loop asks for: low (above every ordinary process, below the
-#: kernel's own real-time threads and below ``ftcomp twin``'s cell, which stands for hardware
-#: outside the machine).
+#: The SCHED_FIFO priority a live loop asks for: low (above every ordinary process and above
+#: ``ftcomp twin``'s threads, which stand for hardware outside the machine and so never take the
+#: CPU from the loop; below the kernel's own real-time threads).
 LOOP_PRIORITY = 5
 
 #: The SCHED_FIFO priority of the other Python threads while a live loop runs (below the loop

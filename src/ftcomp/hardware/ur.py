@@ -39,7 +39,7 @@ from __future__ import annotations
 import math
 import time
 from types import TracebackType
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -71,6 +71,12 @@ _STILL_FOR_S = 0.1
 #: moveL turns the tool at this many rad/s per m/s of its speed parameter (UR's trajectory
 #: generator: angular speed = 4 x linear speed, in rad/s).
 _MOVEL_RAD_PER_M = 4.0
+
+
+#: RTDE ``safety_status_bits``: protective stopped (bit 2), emergency stopped (bit 7), as
+#: ur_rtde's ``isProtectiveStopped`` and ``isEmergencyStopped`` test them.
+_PROTECTIVE_STOPPED: Final = 1 << 2
+_STOPPED_BITS: Final = _PROTECTIVE_STOPPED | 1 << 7
 
 
 def _pose_list(p: NDArray[np.float64], R: NDArray[np.float64]) -> list[float]:
@@ -122,7 +128,9 @@ class URRobot(LatenessOfPacer):
         self.pacer = RateLimiter(
             1.0 / frequency_hz if frequency_hz else 0.002, name=type(self).__name__
         )
-        self._freshest_offset_s = -math.inf
+        # The controller's newest timestamp [s] and when it changed, on the host's clock [s].
+        self._last_timestamp_s = -math.inf
+        self._fresh_at_s = -math.inf
         self._servo_target: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self._moving = False
 
@@ -153,7 +161,8 @@ class URRobot(LatenessOfPacer):
             )
         except RuntimeError as exc:
             raise HardwareError(f"{self.uri.text!r}: ur_rtde could not connect: {exc}") from None
-        self._freshest_offset_s = self.receive.getTimestamp() - time.monotonic()
+        self._last_timestamp_s = self.receive.getTimestamp()
+        self._fresh_at_s = time.monotonic()
         return self
 
     def __exit__(
@@ -210,17 +219,23 @@ class URRobot(LatenessOfPacer):
         r = self.receive
         if r is None or not r.isConnected():
             raise HardwareError(f"{self.uri.text!r}: lost the connection to the controller")
-        # The controller's clock minus the host's, at the freshest data seen, and now: the
-        # difference is how far the newest data lags behind (the clocks run at the same rate).
-        offset = r.getTimestamp() - time.monotonic()
-        self._freshest_offset_s = max(self._freshest_offset_s, offset)
-        lag = self._freshest_offset_s - offset
-        if lag > self.timeout_s:
+        # New data is a timestamp that changed; none for timeout_s on the host's clock is a
+        # stalled stream. (Comparing the controller's clock with the host's instead read a
+        # controller clock running slow, the twin's simulated one under load, as a stall: a
+        # real controller's crystal drifts too, 0.5 s in hours at 50 ppm.)
+        timestamp, now = r.getTimestamp(), time.monotonic()
+        if timestamp != self._last_timestamp_s:
+            self._last_timestamp_s, self._fresh_at_s = timestamp, now
+        elif now - self._fresh_at_s > self.timeout_s:
             raise HardwareError(
-                f"{self.uri.text!r}: no new data from the controller for {lag:.2f} s"
+                f"{self.uri.text!r}: no new data from the controller for "
+                f"{now - self._fresh_at_s:.2f} s"
             )
-        if r.isProtectiveStopped() or r.isEmergencyStopped():
-            kind = "protective" if r.isProtectiveStopped() else "emergency"
+        # One getter for both stops (ur_rtde's isProtectiveStopped and isEmergencyStopped each
+        # read these bits again: every getter crosses into the client, ~10 us a call).
+        bits = int(r.getSafetyStatusBits())
+        if bits & _STOPPED_BITS:
+            kind = "protective" if bits & _PROTECTIVE_STOPPED else "emergency"
             raise HardwareError(f"{self.uri.text!r}: the arm is in a {kind} stop")
 
     def pose(self) -> PoseSample:

@@ -175,6 +175,7 @@ class CsvLog:
         self.columns = tuple(columns)
         self.rows = 0
         self.observer = observer
+        self._later: list[tuple[Sequence[float], int | None]] = []
 
     def write(self, row: Sequence[float], t_ns: int | None = None) -> None:
         """One row: its first value a time stamp [s], the others numbers; ``t_ns``: the row's
@@ -184,6 +185,20 @@ class CsvLog:
         self.rows += 1
         if self.observer is not None:
             self.observer.row(round(row[0] * 1e9) if t_ns is None else t_ns, row)
+
+    def write_later(self, row: Sequence[float], t_ns: int | None = None) -> None:
+        """Keep a row (as :meth:`write` takes it) for the next :meth:`flush`: a control loop
+        keeps the row's formatting (about 30 us for a run's 30 numbers, 0.1 ms at p99) off the
+        command's path and flushes in its slack (``run_loop(in_slack=[log.flush])``)."""
+        self._later.append((row, t_ns))
+
+    def flush(self) -> None:
+        """Write the rows kept by :meth:`write_later`, in order."""
+        later = self._later
+        if later:
+            for row, t_ns in later:
+                self.write(row, t_ns)
+            later.clear()
 
     def event(self, t_ns: int, kind: str, text: str) -> None:
         """Tell the observer of an event (see :meth:`LogObserver.event`); no row is written."""
@@ -239,7 +254,11 @@ def csv_log(
         with atomic_output(path) as tmp, tmp.open("w", encoding="utf-8", newline="") as handle:
             if thread is not None:
                 thread.open(columns)
-            yield CsvLog(handle, columns, digits, thread)
+            log = CsvLog(handle, columns, digits, thread)
+            try:
+                yield log
+            finally:
+                log.flush()
     finally:
         if thread is not None:
             thread.close()

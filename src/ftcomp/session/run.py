@@ -389,7 +389,7 @@ def run_compliant(
                 row += load.update(t_s)
             if tracker is not None:
                 row.append(1.0 if tracker.updated else 0.0)
-            log.write(row, r.now_ns)
+            log.write_later(row, r.now_ns)  # formatted after the command (run_loop's slack)
             summary.add(record)
 
         step = CompliantStep(
@@ -403,7 +403,7 @@ def run_compliant(
         )
         timing = LoopTiming(period_s, paced=on_host_clock(robot), name="ftcomp run")
         try:
-            run_loop(cycle, step, timing=timing)
+            run_loop(cycle, step, timing=timing, in_slack=(log.flush,))
             outcome = step.outcome
         except KeyboardInterrupt:
             outcome, message = "interrupted", "interrupted (Ctrl-C)"
@@ -417,6 +417,7 @@ def run_compliant(
             )
         elif not message and step.faulted:
             message = f"protective stop: {outcome}"
+        log.flush()  # the last cycle's row, and one kept when the loop ended by an exception
         if observers:
             _tell_end(log, t0_ns[0] if t0_ns else 0, summary.t_ns, load, outcome, message)
         loop_timing = timing.summary()

@@ -316,7 +316,7 @@ def stream(
     with InterruptHold() as hold, csv_log(log_path, columns, observers=observers) as log:
         logger = StreamLogger(
             sensor,
-            log.write,
+            log.write_later,  # formatted after the command (run_loop's slack)
             config.duration_s,
             with_pose=with_pose,
             compensator=compensator,
@@ -347,7 +347,7 @@ def stream(
         cycle = ControlCycle(robot, sensor, mount=mount)  # the logger compensates
         timing = LoopTiming(cycle.period_s, paced=on_host_clock(robot), name="ftcomp stream")
         try:
-            run_loop(cycle, logger, sinks=sinks, timing=timing)
+            run_loop(cycle, logger, sinks=sinks, timing=timing, in_slack=(log.flush,))
         except EndOfReplayError:
             outcome = "end_of_replay"
         except KeyboardInterrupt:
@@ -357,6 +357,7 @@ def stream(
         finally:
             hold.finishing(f"finishing the log {log_path}")
             logger.finish()
+            log.flush()
         t0_ns = logger.t0_ns if logger.t0_ns is not None else 0
         for event in online.events if online is not None else []:  # stamped like the rows
             log.event(round(event.confirmed_t_s * 1e9), event.kind, event.describe())

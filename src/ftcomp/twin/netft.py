@@ -31,6 +31,7 @@ from multiprocessing.connection import Connection
 from typing import Final
 
 from ftcomp.errors import ParameterError
+from ftcomp.hardware.pacing import LOOP_PRIORITY
 
 __all__ = [
     "COUNTS_PER_FORCE",
@@ -259,9 +260,13 @@ class NetFtServer:
         self.sock.close()
 
 
-#: The SCHED_FIFO priority the twin's loops ask for (low: above ordinary processes, below the
-#: kernel's own real-time threads).
-RT_PRIORITY: Final = 10
+#: The SCHED_FIFO priority the twin's cell loop asks for; its Net F/T sender asks for one more.
+#: Both stay below a live loop's (:data:`ftcomp.hardware.pacing.LOOP_PRIORITY`, 5) and above
+#: every ordinary process: the twin stands for hardware outside the machine, which never takes
+#: the CPU from the loop that controls it (at 12 and 11, above the loop, the twin's bursts
+#: showed in the loop's compute time), yet a busy machine's ordinary processes cannot hold the
+#: twin off its own rates.
+RT_PRIORITY: Final = LOOP_PRIORITY - 2
 
 
 def realtime_priority(priority: int) -> bool:
@@ -309,6 +314,11 @@ def bind_socket(host: str, port: int, kind: int = socket.SOCK_STREAM) -> socket.
 
 def _child(host: str, rate_hz: float, realtime: bool, conn: Connection) -> None:
     """The Net F/T process: bind, say so, then serve what the cell's loop sends."""
+    if realtime:
+        # This thread reads the cell's samples from the pipe, and the server's threads
+        # inherit its priority: held off by an ordinary process (or holding the interpreter's
+        # lock when one preempted it), it let the pipe fill and the cell's loop block on it.
+        realtime_priority(RT_PRIORITY + 1)
     try:
         rdt = bind_socket(host, RDT_PORT, socket.SOCK_DGRAM)
         try:

@@ -42,6 +42,7 @@ import numpy as np
 from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import ParameterError
 from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
+from ftcomp.hardware.pacing import realtime_loop
 from ftcomp.hardware.registry import parse_uri
 from ftcomp.io.atomic import atomic_output, atomic_write_text
 from ftcomp.io.truth_json import truth_document
@@ -50,7 +51,7 @@ from ftcomp.sim.arm import ur5e_arm
 from ftcomp.sim.backend import MAX_LOAD_KG, sensor_spec_from_uri
 from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, SimCell
 from ftcomp.sim.scene import SceneConfig
-from ftcomp.sim.sensor import SensorSpec
+from ftcomp.sim.sensor import SensorSpec, SimWrenchSensor
 from ftcomp.sim.surfaces import SURFACE_KINDS
 from ftcomp.sim.tool import LoadSpec
 from ftcomp.twin.controller import UrController
@@ -61,7 +62,6 @@ from ftcomp.twin.netft import (
     SERIOUS_STATUS,
     NetFtProcess,
     bind_socket,
-    realtime_priority,
 )
 from ftcomp.twin.ports import (
     DASHBOARD_PORT,
@@ -75,6 +75,7 @@ from ftcomp.twin.rtde import RtdeSession
 __all__ = [
     "CONTACT_LOG_COLUMNS",
     "FAULTS",
+    "MAX_SENSOR_RATE_HZ",
     "ROBOTS",
     "TwinConfig",
     "TwinResult",
@@ -102,6 +103,12 @@ _RTDE_PORT: Final = 30004
 CONTACT_LOG_COLUMNS: Final = (
     "t_s", "fx", "fy", "fz", "tx", "ty", "tz", "x", "y", "z", "rx", "ry", "rz", "safety",
 )  # fmt: skip
+
+
+#: Net F/T counts per N (forces) and per N*m (torques), by axis.
+_COUNTS_PER_UNIT: Final = np.repeat([COUNTS_PER_FORCE, COUNTS_PER_TORQUE], 3)
+#: The fastest RDT output rate the twin's Net F/T offers [Hz] (ATI's Net F/T: up to 7000 Hz).
+MAX_SENSOR_RATE_HZ: Final = 7000.0
 
 
 @dataclass(frozen=True)
@@ -134,6 +141,9 @@ class TwinConfig:
             the flange frame, as an e-Series does.
         tcp_rotvec_rad: the TCP offset's rotation (TCP axes in the flange frame), a rotation
             vector [rad].
+        sensor_rate_hz: the Net F/T's RDT output rate [Hz], in (0, :data:`MAX_SENSOR_RATE_HZ`]
+            (a real Net F/T streams at up to 7000 Hz); each record a fresh sample (noise and
+            quantisation drawn per record) of the contact wrench held between physics steps.
     """
 
     robot_host: str
@@ -155,6 +165,7 @@ class TwinConfig:
     realtime: bool = True
     tcp_offset_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
     tcp_rotvec_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    sensor_rate_hz: float = SensorSpec().output_rate_Hz
 
     def __post_init__(self) -> None:
         for name in ("robot_host", "sensor_host"):
@@ -205,6 +216,13 @@ class TwinConfig:
         ):
             raise ParameterError(
                 f"tcp_rotvec_rad must be 3 values of norm <= pi, got {self.tcp_rotvec_rad}"
+            )
+        if not (
+            math.isfinite(self.sensor_rate_hz) and 0.0 < self.sensor_rate_hz <= MAX_SENSOR_RATE_HZ
+        ):
+            raise ParameterError(
+                f"sensor_rate_hz must be in (0, {MAX_SENSOR_RATE_HZ:g}] Hz (a Net F/T's RDT "
+                f"rates), got {self.sensor_rate_hz:g}"
             )
 
     def sim_uri(self) -> str:
@@ -482,18 +500,50 @@ class _Twin:
         return dataclasses.replace(result, rdt_records=self.netft.sent)
 
     def run(self, seconds: float, stop: threading.Event, log: Any) -> TwinResult:
-        cell, ctl = self.cell, self.controller
-        realtime = self.config.realtime and realtime_priority(RT_PRIORITY + 2)
         timing = LoopTiming(_CYCLE_S, name="ftcomp twin")
-        timing.realtime = realtime
         # The cell's set-up (MuJoCo, numpy, scipy) is frozen out of the collector: a full
         # collection over it took 30-40 ms, a stall that starved the Net F/T stream.
         gc.collect()
         gc.freeze()
+        # As every live loop of ftcomp (hardware.pacing): SCHED_FIFO for the loop, and for the
+        # process's other threads (the RTDE sessions, the script and dashboard ports) a low
+        # real-time priority, so that none is preempted by an ordinary process while it holds
+        # the interpreter's lock (which stalled the cell's loop behind it).
+        with realtime_loop(RT_PRIORITY, realtime=self.config.realtime) as timing.realtime:
+            reason = self._cycles(seconds, stop, log, timing)
+        summary = timing.summary()
+        return TwinResult(
+            cycles=summary.cycles,
+            late_cycles=summary.late_cycles,
+            rtde_packets=self.packets_closed + sum(s.packets for s in self.sessions),
+            rdt_records=0,
+            step_us_p50=summary.compute_p50_s * 1e6 if summary.cycles else 0.0,
+            step_us_p99=summary.compute_p99_s * 1e6 if summary.cycles else 0.0,
+            reason=reason,
+            realtime=timing.realtime,
+            timing=summary,
+        )
+
+    def _cycles(self, seconds: float, stop: threading.Event, log: Any, timing: LoopTiming) -> str:
+        """The cell's loop until ``seconds`` pass or ``stop`` is set; why it ended."""
+        cell, ctl = self.cell, self.controller
         start = time.monotonic()
         due = start
         rng = np.random.default_rng(self.config.seed + 7)
         reason = "time"
+        # The Net F/T's samples at its own rate (the cell's sensor when the rates agree): each
+        # physics step's wrench held for the ticks until the next, every tick a fresh draw.
+        rate_hz = self.config.sensor_rate_hz
+        wrist = (
+            cell.sensor
+            if rate_hz == cell.sensor.spec.output_rate_Hz
+            else SimWrenchSensor(
+                dataclasses.replace(cell.sensor.spec, output_rate_Hz=rate_hz),
+                cell.ideal_wrench_sensor,
+                cell.time,
+                seed=self.config.seed,
+            )
+        )
         while True:
             now = time.monotonic()
             if stop.is_set():
@@ -507,15 +557,16 @@ class _Twin:
             twist = ctl.cycle(float(np.linalg.norm(w_contact[:3])))
             cell.command_twist(twist)
             cell.wait_cycle()
-            # Read after each 1 ms: at 1200 Hz most reads then see one new tick (the cheap path).
-            samples = cell.sensor.read_new()
+            # Read after each 1 ms physics step: the ticks since the last one see its state.
+            samples = wrist.read_new()
             cell.wait_cycle()
-            samples += cell.sensor.read_new()
-            counts = [
-                [round(v * COUNTS_PER_FORCE) for v in s.wrench_sensor[:3]]
-                + [round(v * COUNTS_PER_TORQUE) for v in s.wrench_sensor[3:]]
-                for s in samples
-            ]
+            samples += wrist.read_new()
+            # In counts, all samples in one numpy call (rint halves to even, as round() did).
+            counts = (
+                np.rint(np.reshape([s.wrench_sensor for s in samples], (-1, 6)) * _COUNTS_PER_UNIT)
+                .astype(np.int64)
+                .tolist()
+            )
             if counts:
                 self._last_wrench = samples[-1].wrench_sensor.tolist()
             status = (
@@ -549,18 +600,7 @@ class _Twin:
                 time.sleep(wait)
             elif wait < -0.05:  # far behind (a stall): start the schedule again
                 due = time.monotonic()
-        summary = timing.summary()
-        return TwinResult(
-            cycles=summary.cycles,
-            late_cycles=summary.late_cycles,
-            rtde_packets=self.packets_closed + sum(s.packets for s in self.sessions),
-            rdt_records=0,
-            step_us_p50=summary.compute_p50_s * 1e6 if summary.cycles else 0.0,
-            step_us_p99=summary.compute_p99_s * 1e6 if summary.cycles else 0.0,
-            reason=reason,
-            realtime=realtime,
-            timing=summary,
-        )
+        return reason
 
 
 def serve_twin(
@@ -586,7 +626,7 @@ def serve_twin(
     sys.setswitchinterval(2e-4)
     cell = config.open_cell()
     with _bound(config) as ports:
-        netft = NetFtProcess(config.sensor_host, SensorSpec().output_rate_Hz, config.realtime)
+        netft = NetFtProcess(config.sensor_host, config.sensor_rate_hz, config.realtime)
         twin = _Twin(config, cell, ports, netft)
         if config.truth_path is not None:
             import json
