@@ -7,6 +7,7 @@ terminated (SIGTERM, then killed) when the block ends.
 
 from __future__ import annotations
 
+import json
 import os
 import select
 import subprocess
@@ -15,6 +16,7 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 
 from standins.launch import loopback_address
 
@@ -86,3 +88,14 @@ def running_twin(
         for stream in (proc.stdout, proc.stderr):
             if stream is not None:
                 stream.close()
+
+
+def calibration_from_truth(truth: Path, calibration: Path) -> None:
+    """A calibration file holding a twin's true tool, from its ``--truth`` file (for a run that
+    needs a compensation only)."""
+    from ftcomp.io.calibration_json import FORMAT
+
+    document = json.loads(truth.read_text())
+    keys = ("tool_weight_N", "center_of_gravity_m", "force_bias_N", "torque_bias_Nm")
+    data = {key: document[key] for key in (*keys, "base_tilt_deg", "gravity_in_base_N")}
+    calibration.write_text(json.dumps({"format": FORMAT, "method": "paper", **data}))

@@ -5,7 +5,6 @@ pendant (sensor-side faults: helper rt's watchdog tests)."""
 from __future__ import annotations
 
 import csv
-import json
 import math
 import subprocess
 import sys
@@ -17,8 +16,7 @@ pytest.importorskip("rtde_control")
 pytest.importorskip("pynetft")
 pytest.importorskip("mujoco")
 
-from ftcomp.io.calibration_json import FORMAT
-from standins.twin_process import running_twin
+from standins.twin_process import calibration_from_truth, running_twin
 
 FAULT_AT_S = 0.5
 SECONDS = 4.0
@@ -28,32 +26,14 @@ STOPS = {
     "rtde-stop": ("no new data from the controller for 0.50 s", 0.5),
     "script-stop": ("the controller refused speedL", 0.0),
 }
-RTDE_STOP_HANGS = pytest.mark.xfail(
-    reason="ur_rtde 1.6.5 (its source, rtde_control_interface.cpp): run sees the silence and "
-    "stops, but URRobot.stop's speedStop is a blocking command whose sendCommand waits for the "
-    "program's 'done' in a stream that no longer comes (UR_EXECUTION_TIMEOUT, 300 s); 2.5 s "
-    "into the silence the control interface's receive thread reconnects, and reconnect() waits "
-    "for the first package with no time limit. Seen on the UR5e twin under load: 1 run of 3 "
-    "ended in time, 2 hung past the test's 20 s. A fix for hardware/ur.py: "
-    "with the stream stale, stop through the dashboard (stop), not a blocking RTDE command",
-    strict=False,
-)
 CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"
-
-
-def _calibration_from_truth(truth: Path, calibration: Path) -> None:
-    """A calibration file holding the twin's true tool (the run needs a compensation only)."""
-    document = json.loads(truth.read_text())
-    keys = ("tool_weight_N", "center_of_gravity_m", "force_bias_N", "torque_bias_Nm")
-    data = {key: document[key] for key in (*keys, "base_tilt_deg", "gravity_in_base_N")}
-    calibration.write_text(json.dumps({"format": FORMAT, "method": "paper", **data}))
 
 
 @pytest.mark.parametrize(
     "fault",
     [
         "protective-stop",
-        pytest.param("rtde-stop", marks=RTDE_STOP_HANGS),
+        "rtde-stop",
         "script-stop",
     ],
 )
@@ -63,7 +43,7 @@ def test_a_robot_fault_ends_run_at_once_with_its_stop_and_a_valid_log(
     truth, calibration, log = tmp_path / "truth.json", tmp_path / "cal.json", tmp_path / "run.csv"
     options = ("--truth", str(truth), "--fault", fault, "--fault-at-s", str(FAULT_AT_S))
     with running_twin(f"twin_run_{fault}", *options) as twin:
-        _calibration_from_truth(truth, calibration)
+        calibration_from_truth(truth, calibration)
         done = subprocess.run(
             [sys.executable, "-c", CLIENT, "run", "--robot", twin.robot_uri,
              "--sensor", twin.sensor_uri, "-c", str(calibration), "--control", "admittance",

@@ -36,8 +36,11 @@ command, so recording by hand (free-drive) and streaming never move the robot.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import threading
 import time
+from collections.abc import Callable
 from types import TracebackType
 from typing import Any, Final
 
@@ -133,6 +136,9 @@ class URRobot(LatenessOfPacer):
         self._fresh_at_s = -math.inf
         self._servo_target: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self._moving = False
+        # The controller's stream went silent or the connection dropped: ur_rtde's blocking
+        # commands would wait on it (see _stop_without_stream).
+        self._silent = False
 
     # ----------------------------------------------------------------- lifecycle
     @property
@@ -177,11 +183,17 @@ class URRobot(LatenessOfPacer):
         finally:
             if self.control is not None:
                 control, self.control = self.control, None
-                control.stopScript()
-                control.disconnect()
+                if self._silent:  # stopScript would wait for the program's end in silent data
+                    _bounded(control.disconnect, _SILENT_WAIT_S, "ur-disconnect")
+                else:
+                    control.stopScript()
+                    control.disconnect()
             if self.receive is not None:
                 receive, self.receive = self.receive, None
-                receive.disconnect()
+                if self._silent:
+                    _bounded(receive.disconnect, _SILENT_WAIT_S, "ur-disconnect")
+                else:
+                    receive.disconnect()
 
     def connect_control(self) -> None:
         """Take control of the arm now (uploads ur_rtde's URScript, about a second), rather than
@@ -218,6 +230,7 @@ class URRobot(LatenessOfPacer):
         """
         r = self.receive
         if r is None or not r.isConnected():
+            self._silent = True
             raise HardwareError(f"{self.uri.text!r}: lost the connection to the controller")
         # New data is a timestamp that changed; none for timeout_s on the host's clock is a
         # stalled stream. (Comparing the controller's clock with the host's instead read a
@@ -227,6 +240,7 @@ class URRobot(LatenessOfPacer):
         if timestamp != self._last_timestamp_s:
             self._last_timestamp_s, self._fresh_at_s = timestamp, now
         elif now - self._fresh_at_s > self.timeout_s:
+            self._silent = True
             raise HardwareError(
                 f"{self.uri.text!r}: no new data from the controller for "
                 f"{now - self._fresh_at_s:.2f} s"
@@ -367,10 +381,54 @@ class URRobot(LatenessOfPacer):
         if self.control is None or not self._moving:
             return
         self._moving = False
-        if self.command == "speedl":
-            self.control.speedStop(10.0)
+        halt = self.control.speedStop if self.command == "speedl" else self.control.servoStop
+        if self._silent:
+            self._stop_without_stream(halt)
         else:
-            self.control.servoStop(10.0)
+            halt(10.0)
+
+    def _stop_without_stream(self, halt: Callable[[float], object]) -> None:
+        """Stop when the controller's stream is silent.
+
+        ur_rtde's ``speedStop``/``servoStop`` send the command, then poll the (now silent)
+        received state for the script's *done* for up to 300 s (``UR_EXECUTION_TIMEOUT``), and
+        its receive thread reconnects without a time limit (ur_rtde 1.6.5,
+        ``rtde_control_interface.cpp``). So the stop command is sent from a worker thread (it
+        reaches a controller whose output alone stalled), and the program is stopped through
+        the dashboard server (port 29999, ``stop``), which stops the arm; each waited for at
+        most :data:`_SILENT_WAIT_S`.
+        """
+        _bounded(lambda: halt(10.0), _SILENT_WAIT_S, "ur-stop")
+
+        def dashboard_stop() -> None:
+            import dashboard_client
+
+            dashboard = dashboard_client.DashboardClient(self.host)
+            dashboard.connect(round(_SILENT_WAIT_S * 1000))
+            try:
+                dashboard.stop()
+            finally:
+                dashboard.disconnect()
+
+        _bounded(dashboard_stop, _SILENT_WAIT_S, "ur-dashboard-stop")
+
+
+#: How long a stop waits for a blocking ur_rtde call once the controller's stream is silent [s].
+_SILENT_WAIT_S: Final = 0.5
+
+
+def _bounded(call: Callable[[], object], wait_s: float, name: str) -> None:
+    """Run ``call`` on a daemon thread and wait for it at most ``wait_s`` (ur_rtde releases
+    the interpreter's lock in its calls, so a call that hangs holds only its own thread).
+    What it raises is dropped: this is the last resort of a stop, on the way to an error."""
+
+    def run() -> None:
+        with contextlib.suppress(Exception):  # a failed last-resort stop: the error follows
+            call()
+
+    worker = threading.Thread(target=run, name=name, daemon=True)
+    worker.start()
+    worker.join(wait_s)
 
 
 def _option_positive(uri: Uri, name: str, value: float | None) -> float:
