@@ -170,4 +170,11 @@ def test_a_live_stream_says_that_it_does_not_apply_the_drift(tmp_path, capsys) -
     out = tmp_path / "log.csv"
     argv = ["stream", "--robot", "sim://", "--sensor", "sim://", "-c", str(cal)]
     assert main([*argv, "--seconds", "0.05", "-o", str(out)]) == 0
-    assert "bias drift model is held at the end of its session live" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "bias drift model is held at the end of its session live" in err
+    assert "add --track-bias" in err
+    # with --track-bias it says the tracking follows the bias, not to add what is given
+    out2 = tmp_path / "log2.csv"
+    assert main([*argv, "--seconds", "0.05", "--track-bias", "-o", str(out2)]) == 0
+    err = capsys.readouterr().err
+    assert "--track-bias follows the bias from there" in err and "add --track-bias" not in err

@@ -56,14 +56,19 @@ def add_range_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def warn_live_drift(calibration: Calibration, path: str) -> None:
-    """Say so when a calibration's bias drift will not be applied by a live loop."""
+def warn_live_drift(calibration: Calibration, path: str, *, tracking: bool = False) -> None:
+    """Say so when a calibration's bias drift will not be applied by a live loop (and, unless
+    ``tracking`` (``--track-bias``) follows the bias from there, how to follow it)."""
     if calibration.bias_drift is not None:
+        then = (
+            "--track-bias follows the bias from there"
+            if tracking
+            else "to follow the bias since, add --track-bias or run ftcomp rebias at the start"
+        )
         print_warnings(
             [
                 f"{path}: the bias drift model is held at the end of its session live (its "
-                "times are the recording's clock, never extrapolated); to follow the bias "
-                "since, add --track-bias or run ftcomp rebias at the start"
+                f"times are the recording's clock, never extrapolated); {then}"
             ]
         )
 

@@ -201,7 +201,7 @@ def run(args: argparse.Namespace) -> int:
     if args.log is not None:
         check_writable(args.log, overwrite=args.force, inputs=[args.calibration, args.output])
     calibration = load_calibration(args.calibration)
-    warn_live_drift(calibration, args.calibration)
+    warn_live_drift(calibration, args.calibration, tracking=args.track_bias)
     with (
         session_observers(
             args.log, args.view, overwrite=args.force, control_frame=args.frame

@@ -119,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
         check_writable(args.log, overwrite=args.force, inputs=[*inputs, args.output])
     calibration = load_calibration(args.calibration) if args.calibration else None
     if calibration is not None:
-        warn_live_drift(calibration, args.calibration)
+        warn_live_drift(calibration, args.calibration, tracking=args.track_bias)
     if calibration is not None and args.robot is None:
         raise ParameterError(
             "compensation (-c) needs the sensor's pose: give --robot (ur://HOST, "
