@@ -409,11 +409,11 @@ def main() -> None:
     print("sum: the parts added per cycle; whole: the cycle timed end to end (as run_loop runs it)")
     if base:
         diff = float(np.max(np.abs(twists[0] - twists[1])))
-        saved = (ours["whole"] - base["whole"]) / ours["whole"]
+        change = ours["whole"] / base["whole"] - 1.0
         print(
             f"whole cycle: this tree {ours['whole']:.2f} us, {labels[1]} {base['whole']:.2f} us, "
-            f"ratio {ours['whole'] / base['whole']:.3f} (this / baseline): the baseline's cycle "
-            f"is {saved:+.1%} shorter"
+            f"ratio {ours['whole'] / base['whole']:.3f} (this / baseline): this tree's cycle "
+            f"is {abs(change):.1%} {'shorter' if change < 0 else 'longer'}"
         )
         print(f"largest |twist difference| between the trees over one ramp: {diff:.1e}")
 

@@ -10,6 +10,7 @@ from ftcomp.errors import OrientationError, ParameterError
 from ftcomp.frames import (
     ENCODING_COLUMNS,
     R_world_base_from_tilt,
+    cross3,
     encode_orientation,
     gravity_in_base,
     gravity_in_sensor,
@@ -120,3 +121,9 @@ def test_rotvec_conversions_on_floats_are_scipys() -> None:
         np.testing.assert_allclose(matrix_from_rotvec(r), R, rtol=0, atol=1e-14)
         expected = Rotation.from_matrix(R).as_rotvec()
         np.testing.assert_allclose(rotvec_from_matrix(R), expected, rtol=0, atol=1e-14)
+
+
+def test_cross3_is_numpys_cross_of_one_pair() -> None:
+    rng = np.random.default_rng(3)
+    for a, b in rng.normal(size=(100, 2, 3)):
+        np.testing.assert_allclose(cross3(a, b), np.cross(a, b), rtol=0, atol=1e-15)

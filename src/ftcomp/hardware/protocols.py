@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.arrays import freeze_field
 from ftcomp.errors import ParameterError
+from ftcomp.frames import cross3
 
 __all__ = [
     "HOST_CLOCK",
@@ -224,7 +225,7 @@ class Mount:
             return twist_sensor_base
         lever = -(R_base_tcp @ self.p_tcp_sensor_m)
         out = np.array(twist_sensor_base, dtype=float)
-        out[:3] += np.cross(out[3:], lever)
+        out[:3] += cross3(out[3:], lever)
         return out
 
 

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.errors import ParameterError
-from ftcomp.frames import matrix_from_rotvec
+from ftcomp.frames import cross3, matrix_from_rotvec
 from ftcomp.hardware.protocols import NothingToClose, Robot, WrenchSample, WrenchSensor
 from ftcomp.hardware.registry import Uri
 from ftcomp.hardware.ur import URRobot
@@ -52,7 +52,7 @@ def tcp_wrench_from_flange(
     """
     f, m = wrench_flange_base[:3], wrench_flange_base[3:]
     lever_base = R_base_tcp @ (R_flange_tcp.T @ p_flange_tcp_m)
-    return np.concatenate([R_base_tcp.T @ f, R_base_tcp.T @ (m - np.cross(lever_base, f))])
+    return np.concatenate([R_base_tcp.T @ f, R_base_tcp.T @ (m - cross3(lever_base, f))])
 
 
 class URWrenchSensor(NothingToClose):
