@@ -41,7 +41,7 @@ import numpy as np
 
 from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import ParameterError
-from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
+from ftcomp.frames import cross3, matrix_from_rotvec, rotvec_from_matrix
 from ftcomp.hardware.pacing import realtime_loop
 from ftcomp.hardware.registry import parse_uri
 from ftcomp.io.atomic import atomic_output, atomic_write_text
@@ -358,9 +358,9 @@ def flange_wrenches(
     f_base, m_base = R_base_tcp @ f_tcp, R_base_tcp @ m_tcp
     lever_base = R_base_tcp @ (R_flange_tcp.T @ p_flange_tcp_m)
     f_flange = R_flange_tcp @ f_tcp
-    m_flange = R_flange_tcp @ m_tcp + np.cross(p_flange_tcp_m, f_flange)
+    m_flange = R_flange_tcp @ m_tcp + cross3(p_flange_tcp_m, f_flange)
     return (
-        [*f_base.tolist(), *(m_base + np.cross(lever_base, f_base)).tolist()],
+        [*f_base.tolist(), *(m_base + cross3(lever_base, f_base)).tolist()],
         [*f_flange.tolist(), *m_flange.tolist()],
     )
 
