@@ -23,8 +23,11 @@ from standins.launch import loopback_address, running_all
 from standins.scenario import HAND_GUIDED_DEG, TOOL_MODEL, Scenario, rotvecs
 
 #: A standard error bound with a reason: the identified numbers are estimates from noisy
-#: readings; three standard errors hold with 99.7 % probability per number.
-SE_BOUND = 3.0
+#: readings, and each test bounds the largest deviation of all ten (weight, bias, centre of
+#: gravity): 4 standard errors hold for all ten with 99.94 % probability (3 hold for one number
+#: with 99.7 %, for all ten only with 97 %: a test failing one run in 35 by chance, as the
+#: stand-ins' random noise made it under load: 3.11 on the centre of gravity).
+SE_BOUND = 4.0
 
 
 def test_record_on_sim_drives_the_paper_poses_and_calibrate_recovers_the_truth(
