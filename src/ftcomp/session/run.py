@@ -368,42 +368,47 @@ def run_compliant(
         csv_log(log_path, columns, digits=17, observers=observers) as log,
     ):
         t0_ns: list[int] = []
+        # The cycles' records wait for the period's slack: their rows are built and written
+        # after the command has been sent (run_loop's in_slack), not on the command's path.
+        pending: deque[CycleRecord] = deque()
 
-        def on_cycle(record: CycleRecord) -> None:
-            r = record.reading
-            if not t0_ns:
-                t0_ns.append(r.now_ns)
-            t_s = (r.now_ns - t0_ns[0]) * 1e-9
-            row = [
-                t_s,
-                (r.t_sample_ns - t0_ns[0]) * 1e-9,
-                *r.wrench_raw_sensor.tolist(),
-                *r.wrench_contact_sensor.tolist(),
-                *quat_from_matrix(r.R_base_sensor),
-                *r.p_base_sensor.tolist(),
-                *record.error.tolist(),
-                *record.twist_base.tolist(),
-                1.0 if record.sent else 0.0,
-            ]
-            if load is not None:
-                row += load.update(t_s)
-            if tracker is not None:
-                row.append(1.0 if tracker.updated else 0.0)
-            log.write_later(row, r.now_ns)  # formatted after the command (run_loop's slack)
-            summary.add(record)
+        def log_pending() -> None:
+            while pending:
+                record = pending.popleft()
+                r = record.reading
+                if not t0_ns:
+                    t0_ns.append(r.now_ns)
+                t_s = (r.now_ns - t0_ns[0]) * 1e-9
+                row = [
+                    t_s,
+                    (r.t_sample_ns - t0_ns[0]) * 1e-9,
+                    *r.wrench_raw_sensor.tolist(),
+                    *r.wrench_contact_sensor.tolist(),
+                    *quat_from_matrix(r.R_base_sensor),
+                    *r.p_base_sensor.tolist(),
+                    *record.error.tolist(),
+                    *record.twist_base.tolist(),
+                    1.0 if record.sent else 0.0,
+                ]
+                if load is not None:
+                    row += load.update(t_s)
+                if tracker is not None:  # the same cycle's: the next read has not run yet
+                    row.append(1.0 if tracker.updated else 0.0)
+                log.write(row, r.now_ns)
+                summary.add(record)
 
         step = CompliantStep(
             controller,
             robot,
             config.duration_s,
-            on_cycle,
+            pending.append,
             settle=config.settle,
             dry_run=config.dry_run,
             max_late_cycles=config.max_late_cycles,
         )
         timing = LoopTiming(period_s, paced=on_host_clock(robot), name="ftcomp run")
         try:
-            run_loop(cycle, step, timing=timing, in_slack=(log.flush,))
+            run_loop(cycle, step, timing=timing, in_slack=(log_pending,))
             outcome = step.outcome
         except KeyboardInterrupt:
             outcome, message = "interrupted", "interrupted (Ctrl-C)"
@@ -417,7 +422,7 @@ def run_compliant(
             )
         elif not message and step.faulted:
             message = f"protective stop: {outcome}"
-        log.flush()  # the last cycle's row, and one kept when the loop ended by an exception
+        log_pending()  # the last cycle's row, and one kept when the loop ended by an exception
         if observers:
             _tell_end(log, t0_ns[0] if t0_ns else 0, summary.t_ns, load, outcome, message)
         loop_timing = timing.summary()
