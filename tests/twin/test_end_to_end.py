@@ -90,7 +90,7 @@ def test_run_sets_a_half_kilogram_load_down_gently(
         done = _ftcomp(
             "run", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri,
             "-c", str(calibration), "--control", "admittance", "--axes", "z",
-            *GAINS[surface], "--settle-band-N", "0.05", "--seconds", "30",
+            *GAINS[surface], "--settle-band-N", "0.03", "--seconds", "30",
             "--max-late-cycles", "50",  # a shared CI host: the client process is not real-time
             "-o", str(log),
         )  # fmt: skip
@@ -100,14 +100,11 @@ def test_run_sets_a_half_kilogram_load_down_gently(
         rows = list(csv.DictReader(f))
     fz = np.array([float(r["fz"]) for r in rows])  # the surface pushing up (base z ~ up)
     assert fz.max() <= LOAD_WEIGHT_N + 0.3  # never pressed in beyond the weight
-    # The surface carries it all: within the settle band (the error the run acted on) plus
-    # what the calibration may be off by along z, 3 standard errors of the bias's z and of the
-    # tool weight (the sum of their standard errors bounds that of their sum, whatever their
-    # correlation). A run under load once ended 0.052 N short: 0.032 N inside the band, the
-    # rest the z bias 1.6 standard errors off.
-    cal = json.loads(calibration.read_text())["std_errors"]
-    calibration_z = 3.0 * (cal["force_bias_N"][2] + cal["tool_weight_N"])
-    assert fz[-1] == pytest.approx(LOAD_WEIGHT_N, abs=0.05 + calibration_z)
+    # The surface carries it all (issue 20: within 0.05 N). The run ends as its error enters the
+    # settle band, so the band (0.03 N) takes part of that and the calibration's error along z
+    # the rest: with a 0.05 N band a run under load ended 0.052 N short, 0.032 N inside the band
+    # and 0.020 N from the calibration's z bias (1.6 standard errors off).
+    assert fz[-1] == pytest.approx(LOAD_WEIGHT_N, abs=0.05)
     assert all(r["safety"] == "normal" for r in rows)
     # The lateral contact (on the book the arm's servo springback held by friction, about 2 N;
     # on the sponge, which shears, almost none) is the lateral force the run reports at its end.
