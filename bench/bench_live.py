@@ -117,6 +117,28 @@ def _log_figures(log: Path, period_s: float) -> str:
     )
 
 
+def _goal_figures(log: Path, period_s: float) -> str:
+    """Issue 21's goals from the run's timing block, to the microsecond (its line rounds to
+    10 us): p99 compute within 25 % of the period, p99 sensor age within one period, missed
+    periods at most 0.1 %."""
+    block = log.with_name(log.stem + ".timing.json")  # session.log.timing_path's name
+    if not block.exists():
+        return "no timing block"
+    t = json.loads(block.read_text())
+    compute, age, cycles, missed = (
+        t["compute_p99_s"],
+        t["age_p99_s"],
+        t["cycles"],
+        t["missed_periods"],
+    )
+    age_text = "n/a" if age is None else f"{age * 1e6:.0f} us = {age / period_s:.0%}"
+    return (
+        f"goals: compute p99 {compute * 1e6:.0f} us = {compute / period_s:.1%} of the period "
+        f"(<= 25 %); sensor age p99 {age_text} (<= 100 %); missed "
+        f"{missed / max(cycles + missed, 1):.3%} (<= 0.1 %)"
+    )
+
+
 def _case(
     src: Path, rate: int, hog: bool, seconds: float, folder: Path, view: str | None
 ) -> list[str]:
@@ -151,6 +173,7 @@ def _case(
     if timing:
         out.append(timing + (f" ({late} late cycles logged)" if late else ""))
     out.append(_log_figures(log, 1.0 / rate))
+    out.append(_goal_figures(log, 1.0 / rate))
     return out
 
 
