@@ -40,11 +40,53 @@ def test_rate_limiter_sleeps_the_slack_and_counts_overruns_without_raising(
     assert clock.now == pytest.approx(0.01, abs=1e-12)
     clock.now += 0.013  # an overrun by 3 ms
     assert limiter.sleep() == pytest.approx(-0.003, abs=1e-12)
-    assert limiter.overruns == 1 and limiter.late_in_a_row == 1
+    assert limiter.overruns == 1 and limiter.periods_behind == 0  # the kept schedule carries it
     assert "test loop is late by 3.0 ms" in caplog.text
     clock.now += 0.001
-    assert limiter.sleep() > 0 and limiter.late_in_a_row == 0
+    assert limiter.sleep() > 0 and limiter.periods_behind == 0
     assert limiter.worst_slack_s == pytest.approx(-0.003, abs=1e-12)
+
+
+def test_overruns_shorter_than_a_period_in_a_row_leave_the_loop_on_schedule() -> None:
+    # Under load a 1 kHz run once stopped as "10 periods missed in a row" with no period
+    # missed: ten cycles in a row a little late. Each overran; together they lost half a period.
+    clock = _Clock()
+    limiter = RateLimiter(0.001, clock=clock, sleep=clock.sleep, log_overruns=False)
+    for _ in range(10):
+        clock.now += 0.00105  # a slow patch: every cycle 50 us over its period
+        limiter.sleep()
+        assert limiter.periods_behind == 0
+    assert limiter.overruns == 10
+    clock.now += 0.0004
+    assert limiter.sleep() == pytest.approx(0.0001, abs=1e-9)  # back on the kept schedule
+    assert limiter.periods_behind == 0
+
+
+def test_a_stall_puts_the_loop_behind_by_its_length_and_the_slack_after_pays_it_back() -> None:
+    clock = _Clock()
+    limiter = RateLimiter(0.001, clock=clock, sleep=clock.sleep, log_overruns=False)
+    clock.now += 0.0115  # a stall: 10.5 ms past the end of the first period
+    limiter.sleep()
+    assert limiter.periods_behind == 10
+    for expected in (9, 9, 8, 8, 7):  # cycles of 0.4 ms: 0.6 ms of slack each
+        clock.now += 0.0004
+        limiter.sleep()
+        assert limiter.periods_behind == expected
+    for _ in range(30):
+        clock.now += 0.0004
+        limiter.sleep()
+    assert limiter.periods_behind == 0
+
+
+def test_a_loop_that_overruns_every_period_falls_further_behind() -> None:
+    clock = _Clock()
+    limiter = RateLimiter(0.001, clock=clock, sleep=clock.sleep, log_overruns=False)
+    behind = []
+    for _ in range(60):
+        clock.now += 0.0015  # each cycle takes one and a half periods
+        limiter.sleep()
+        behind.append(limiter.periods_behind)
+    assert behind == sorted(behind) and behind[-1] >= 20
 
 
 def test_rate_limiter_restarts_its_schedule_after_a_long_stall() -> None:
@@ -99,6 +141,6 @@ def test_a_loop_that_keeps_overrunning_is_a_fault_and_stops_the_robot() -> None:
         clock.now += 0.004  # every cycle's work takes 4 periods
         return np.array([0.0, 0.0, -0.01, 0.0, 0.0, 0.0])
 
-    with pytest.raises(LoopOverrunError, match="overran its 1 ms period 3 times in a row"):
+    with pytest.raises(LoopOverrunError, match="fell 3 of its 1 ms periods behind"):
         run_loop(cycle, slow_step)
     assert cell.v_cmd == 0.0

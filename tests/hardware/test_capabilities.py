@@ -114,15 +114,18 @@ def test_a_paced_robot_reports_its_pacers_lateness() -> None:
     robot.pacer = RateLimiter(  # type: ignore[attr-defined]
         0.001, clock=lambda: now[0], sleep=lambda s: None, log_overruns=False
     )
-    assert (robot.late_in_a_row, robot.late_cycles, robot.worst_lateness_s) == (0, 0, 0.0)
+    assert (robot.periods_behind, robot.late_cycles, robot.worst_lateness_s) == (0, 0, 0.0)
     # Periods end at 1, 2, 3 ms: the first two cycles end 0.5 and 0.2 ms late, the third early.
     for now[0] in (0.0015, 0.0022):
         robot.wait_cycle()
-    assert robot.late_in_a_row == 2 and robot.late_cycles == 2
+    assert robot.periods_behind == 0 and robot.late_cycles == 2
     assert robot.worst_lateness_s == pytest.approx(0.0005, abs=1e-12)
     now[0] = 0.0025
     robot.wait_cycle()
-    assert robot.late_in_a_row == 0 and robot.late_cycles == 2
+    assert robot.periods_behind == 0 and robot.late_cycles == 2
+    now[0] = 0.0075  # a stall: 3.5 ms past the period that ended at 4 ms
+    robot.wait_cycle()
+    assert robot.periods_behind == 3 and robot.late_cycles == 3
 
 
 def test_the_simulated_cell_checks_reachability_without_changing_later_moves() -> None:

@@ -94,7 +94,13 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="new readings identical to the last that stop as a frozen sensor, beyond N "
         "(default 5; 0: no check, for a noiseless simulation); docs/control.md",
     )
-    p("--max-late-cycles", type=int, default=10, help="missed periods in a row that stop (10)")
+    p(
+        "--max-late-cycles",
+        type=int,
+        default=10,
+        help="periods the loop may fall behind the robot's schedule before it stops: stalls, net "
+        "of the slack since (10)",
+    )
     p("--seconds", type=float, default=30.0, help="longest run [s] (30)")
     p(
         "--settle-band-N",

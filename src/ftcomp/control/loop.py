@@ -16,7 +16,7 @@ Timing stays apart from computing: the robot's ``wait_cycle`` paces the loop (th
 advances its physics by one period; a real robot's driver waits for its next period), and a
 :class:`RateLimiter` on :func:`time.perf_counter` can hold a loop to wall-clock time where the
 robot does not. The limiter reports its slack and logs overruns instead of raising; a loop that
-is late too often is a fault for the caller to act on (:attr:`RateLimiter.late_in_a_row`).
+falls too far behind is a fault for the caller to act on (:attr:`RateLimiter.periods_behind`).
 """
 
 from __future__ import annotations
@@ -139,10 +139,10 @@ class ControlCycle:
         limiter = self.rate_limiter
         if limiter is not None:
             limiter.sleep()
-            if limiter.late_in_a_row >= self.max_late_cycles:
+            if limiter.periods_behind >= self.max_late_cycles:
                 raise LoopOverrunError(
-                    f"the control loop overran its {limiter.period_s * 1e3:g} ms period "
-                    f"{limiter.late_in_a_row} times in a row (worst: late by "
+                    f"the control loop fell {limiter.periods_behind} of its "
+                    f"{limiter.period_s * 1e3:g} ms periods behind (worst: late by "
                     f"{-limiter.worst_slack_s * 1e3:.1f} ms); motion stopped"
                 )
 

@@ -2,8 +2,8 @@
 
 A real robot's :meth:`~ftcomp.hardware.protocols.Robot.wait_cycle` blocks until its next period
 starts. :class:`RateLimiter` keeps that schedule on :func:`time.perf_counter`, reports its slack
-and counts late periods, so a loop can treat a robot that falls behind as a fault
-(``late_in_a_row``); it never raises itself. The same limiter holds any loop to wall-clock time
+and how far the loop has fallen behind, so a loop can treat a robot that falls behind as a fault
+(``periods_behind``); it never raises itself. The same limiter holds any loop to wall-clock time
 (:class:`ftcomp.control.loop.ControlCycle`). :class:`LatenessOfPacer` makes a robot that waits on
 its limiter report its lateness (:class:`~ftcomp.hardware.protocols.ReportsLateness`).
 
@@ -74,13 +74,19 @@ class RateLimiter:
     lateness (at most once a second) and counted; it never raises. After an overrun of more than
     a whole period the schedule restarts from now instead of trying to catch up.
 
+    How far the loop has fallen behind (:attr:`periods_behind`) is the time a stall took from
+    the schedule, paid back by the slack of the periods after it: a stall of N periods puts
+    the loop N periods behind, a few periods on time clear it, and a loop that overruns every
+    period falls further behind each time. Overruns shorter than a period in a row (a wake-up
+    or two late under load) leave it where it was: the kept schedule already carries them.
+
     Args:
         period_s: the loop period [s], > 0.
         name: names the loop in log messages.
         clock: the time source [s] (for tests).
         sleep: the sleep function [s] (for tests).
         log_overruns: log each overrun (at most once a second); a robot backend that lets its
-            loop judge lateness (``late_in_a_row``) passes False.
+            loop judge lateness (``periods_behind``) passes False.
     """
 
     def __init__(
@@ -103,9 +109,9 @@ class RateLimiter:
         self._last_log = -float("inf")
         #: Slack of the last cycle [s] (negative: it overran by that much).
         self.slack_s = 0.0
-        #: Cycles that overran since the start, and in a row up to now.
+        #: Cycles that overran since the start.
         self.overruns = 0
-        self.late_in_a_row = 0
+        self._behind_s = 0.0
         #: The most negative slack seen [s].
         self.worst_slack_s = 0.0
 
@@ -115,18 +121,27 @@ class RateLimiter:
         slack = self._next - now
         self.slack_s = slack
         if slack >= 0.0:
-            self.late_in_a_row = 0
+            self._behind_s = max(0.0, self._behind_s - slack)  # idle time pays back a stall
             self._sleep(slack)
             self._next += self.period_s
             return slack
         self.overruns += 1
-        self.late_in_a_row += 1
         self.worst_slack_s = min(self.worst_slack_s, slack)
         if self._log_overruns and now - self._last_log >= 1.0:
             _log.warning("%s is late by %.1f ms", self.name, -slack * 1e3)
             self._last_log = now
-        self._next = now + self.period_s if -slack > self.period_s else self._next + self.period_s
+        if -slack > self.period_s:  # a stall: a new schedule from now, the time lost owed
+            self._behind_s -= slack
+            self._next = now + self.period_s
+        else:  # the schedule kept: the next period is shorter by the overrun
+            self._next += self.period_s
         return slack
+
+    @property
+    def periods_behind(self) -> int:
+        """Whole periods the loop has fallen behind its schedule, net of the slack since (see
+        the class docstring)."""
+        return int(self._behind_s / self.period_s + 1e-9)  # a stall of N periods: N, not N - 1
 
 
 class LatenessOfPacer:
@@ -136,9 +151,9 @@ class LatenessOfPacer:
     pacer: RateLimiter
 
     @property
-    def late_in_a_row(self) -> int:
-        """Control periods missed in a row up to now."""
-        return self.pacer.late_in_a_row
+    def periods_behind(self) -> int:
+        """Control periods the loop has fallen behind (:attr:`RateLimiter.periods_behind`)."""
+        return self.pacer.periods_behind
 
     @property
     def late_cycles(self) -> int:

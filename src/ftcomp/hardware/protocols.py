@@ -370,15 +370,16 @@ class TakesControl(Protocol):
 @runtime_checkable
 class ReportsLateness(Protocol):
     """A robot that waits for its control periods on the host's clock and counts the periods
-    its caller missed (a loop treats ``late_in_a_row`` beyond a limit as a fault).
+    its caller missed (a loop treats ``periods_behind`` beyond a limit as a fault).
 
     Backends: ``ur://``, ``fixed://`` (by :class:`ftcomp.hardware.pacing.RateLimiter`). Not
     ``sim://`` (simulated time is never late) nor ``replay://`` (a dry run).
     """
 
     @property
-    def late_in_a_row(self) -> int:
-        """Periods missed in a row up to now (0 after a period on time)."""
+    def periods_behind(self) -> int:
+        """Periods the loop has fallen behind the robot's schedule: the time stalls took, net of
+        the slack of the periods since (0 once it has caught up)."""
         ...
 
     @property

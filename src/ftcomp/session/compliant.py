@@ -40,8 +40,8 @@ from ftcomp.hardware.protocols import ReportsLateness, Robot
 
 __all__ = ["CompliantStep", "CycleRecord", "Outcome", "SettleRule", "Settling"]
 
-#: Why a compliant run ended: ``"duration"``, ``"settled"``, ``"loop_late"`` (the robot kept
-#: missing its period), or a :class:`~ftcomp.control.safety.StopReason` value.
+#: Why a compliant run ended: ``"duration"``, ``"settled"``, ``"loop_late"`` (the loop fell
+#: too far behind the robot's periods), or a :class:`~ftcomp.control.safety.StopReason` value.
 Outcome = str
 
 #: Twist [m/s, rad/s] a caller adds to the law's (a planned motion), from the reading; None: none.
@@ -144,13 +144,15 @@ class CompliantStep:
 
     Args:
         controller: the admittance controller.
-        robot: the arm (its control period; if it reports lateness, missed periods end the run).
+        robot: the arm (its control period; if it reports lateness, a loop too far behind ends the
+            run).
         duration_s: the run ends after this long [s] on the robot's clock.
         on_cycle: called with every cycle's :class:`CycleRecord`.
         settle: when the run is done (None: it runs for the whole duration).
         nominal: a planned twist added to the law's (e.g. a position-only descent).
         dry_run: compute and record every command but send zero.
-        max_late_cycles: this many missed periods in a row end the run (``"loop_late"``).
+        max_late_cycles: the run ends (``"loop_late"``) once the loop has fallen this many periods
+            behind the robot's schedule (``ReportsLateness.periods_behind``).
     """
 
     def __init__(
@@ -210,7 +212,7 @@ class CompliantStep:
         if r.now_ns - self.t0_ns >= self.duration_ns:
             self.outcome = "duration"
             return None
-        if self.lateness is not None and self.lateness.late_in_a_row >= self.max_late:
+        if self.lateness is not None and self.lateness.periods_behind >= self.max_late:
             self.outcome = "loop_late"
             return None
         nominal = self.nominal(r) if self.nominal is not None else None

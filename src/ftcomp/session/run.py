@@ -190,7 +190,8 @@ class RunConfig:
         duration_s: the longest run [s], > 0.
         settle: end once the selected force error has settled (None: run ``duration_s``).
         dry_run: compute and log every command, send none.
-        max_late_cycles: missed periods in a row that stop the run, >= 1.
+        max_late_cycles: periods the loop may fall behind the robot's schedule (stalls, net of the
+            slack since) before the run stops, >= 1.
         online_load: weigh a grasped load online (rate: 1 / the robot's control period) and
             compensate it too once weighed; start with the gripper empty.
         track_bias: let the bias follow the sensor while the arm is still and free
@@ -417,7 +418,8 @@ def run_compliant(
         hold.finishing(f"finishing the log {log_path}")
         if not message and outcome == "loop_late":
             message = (
-                f"loop late: the robot missed {config.max_late_cycles} periods in a row "
+                f"loop late: the loop fell {config.max_late_cycles} periods behind the robot's "
+                f"schedule "
                 f"(worst start {timing.summary().lateness_max_s * 1e3:.1f} ms late)"
             )
         elif not message and step.faulted:
