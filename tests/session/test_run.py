@@ -128,6 +128,45 @@ def test_a_sensor_fault_stops_the_run_in_the_period_that_sees_it_and_keeps_the_l
     assert np.all(rows[-1, -7:-1] == 0.0)  # that cycle commanded nothing
 
 
+class _FallingBehind:
+    """The simulated cell as a paced robot whose loop is ``behind`` periods behind its schedule
+    from its 50th cycle on (what a robot's pacer reports after a stall)."""
+
+    def __init__(self, robot: object, behind: int) -> None:
+        self._robot, self._behind, self.cycles = robot, behind, 0
+        self.late_cycles, self.worst_lateness_s = 0, 0.0
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._robot, name)
+
+    def wait_cycle(self) -> None:
+        self.cycles += 1
+        self._robot.wait_cycle()  # type: ignore[attr-defined]
+
+    @property
+    def periods_behind(self) -> int:
+        return self._behind if self.cycles >= 50 else 0
+
+
+@pytest.mark.parametrize("behind", [2, 3])
+def test_a_loop_as_far_behind_as_the_limit_stops_the_run_and_one_period_less_does_not(
+    tool: GravityModel, tmp_path: Path, behind: int
+) -> None:
+    config = RunConfig(AdmittanceConfig(_limits()), duration_s=0.2, max_late_cycles=3)
+    log = tmp_path / "run.csv"
+    with ftcomp.open_robot(PLACE) as robot, ftcomp.open_sensor("sim://", robot) as sensor:
+        paced = _FallingBehind(robot, behind)
+        result = run_compliant(paced, sensor, tool, config, log)  # type: ignore[arg-type]
+    if behind < 3:
+        assert result.outcome == "duration", result.message
+        return
+    assert result.outcome == "loop_late" and result.faulted
+    assert result.message.startswith("loop late: the loop fell 3 periods behind"), result.message
+    assert result.cycles == 50  # the step that saw it ended the run
+    _, rows = _read_log(log)
+    assert len(rows) == result.cycles
+
+
 def test_run_configurations_are_checked(tool: GravityModel) -> None:
     with pytest.raises(ParameterError, match="unknown selection axis 'q'"):
         AdmittanceConfig(_limits(), axes="q")
