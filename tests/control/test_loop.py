@@ -83,6 +83,18 @@ def test_a_stall_puts_the_loop_behind_by_its_length_and_the_slack_after_pays_it_
     assert limiter.periods_behind == 0
 
 
+def test_a_restart_forgives_the_pause_before_a_loop() -> None:
+    clock = _Clock()
+    limiter = RateLimiter(0.001, clock=clock, sleep=clock.sleep, log_overruns=False)
+    clock.now += 0.0004
+    limiter.sleep()  # a first loop's cycle
+    clock.now += 0.5  # a pause before the next loop on the same robot: no stall of that loop
+    limiter.restart()
+    clock.now += 0.0004
+    assert limiter.sleep() == pytest.approx(0.0006, abs=1e-9)
+    assert limiter.periods_behind == 0
+
+
 def test_a_loop_that_overruns_every_period_falls_further_behind() -> None:
     clock = _Clock()
     limiter = RateLimiter(0.001, clock=clock, sleep=clock.sleep, log_overruns=False)

@@ -134,7 +134,7 @@ class _FallingBehind:
 
     def __init__(self, robot: object, behind: int) -> None:
         self._robot, self._behind, self.cycles = robot, behind, 0
-        self.late_cycles, self.worst_lateness_s = 0, 0.0
+        self.late_cycles, self.worst_lateness_s, self.restarts = 0, 0.0, 0
 
     def __getattr__(self, name: str) -> object:
         return getattr(self._robot, name)
@@ -146,6 +146,9 @@ class _FallingBehind:
     @property
     def periods_behind(self) -> int:
         return self._behind if self.cycles >= 50 else 0
+
+    def restart_schedule(self) -> None:
+        self.restarts += 1
 
 
 @pytest.mark.parametrize("behind", [2, 3])
@@ -160,6 +163,7 @@ def test_a_loop_as_far_behind_as_the_limit_stops_the_run_and_one_period_less_doe
     if behind < 3:
         assert result.outcome == "duration", result.message
         return
+    assert paced.restarts == 1  # the loop started the robot's schedule
     assert result.outcome == "loop_late" and result.faulted
     assert result.message.startswith("loop late: the loop fell 3 periods behind"), result.message
     assert result.cycles == 50  # the step that saw it ended the run

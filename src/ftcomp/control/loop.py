@@ -34,7 +34,7 @@ from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.pacing import RateLimiter, on_host_clock, realtime_loop
-from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
+from ftcomp.hardware.protocols import Mount, ReportsLateness, Robot, WrenchSensor
 
 __all__ = [
     "ControlCycle",
@@ -221,6 +221,12 @@ def run_loop(
                 # collection above: 50-80 ms) held the interpreter's lock: the first cycle's
                 # reading was once older than the stale limit, a healthy stream stopped.
                 time.sleep(_AFTER_SETUP_S)
+            # The schedules start with the loop: what came before it (the set-up, an earlier
+            # loop on the same robot) is no stall.
+            if isinstance(robot, ReportsLateness):
+                robot.restart_schedule()
+            if cycle.rate_limiter is not None:
+                cycle.rate_limiter.restart()
             while max_cycles is None or n < max_cycles:
                 timing.start()
                 reading = cycle.read()

@@ -143,6 +143,12 @@ class RateLimiter:
         self._first = False
         return slack
 
+    def restart(self) -> None:
+        """A new schedule from now with nothing owed: a loop starts (the time since the last
+        :meth:`sleep`, a pause between two loops on one robot, is no stall)."""
+        self._next = self._clock() + self.period_s
+        self._behind_s = 0.0
+
     @property
     def periods_behind(self) -> int:
         """Whole periods the loop has fallen behind its schedule, net of the slack since (see
@@ -155,6 +161,11 @@ class LatenessOfPacer:
     :meth:`~ftcomp.hardware.protocols.Robot.wait_cycle` waits on its ``pacer`` (a mixin)."""
 
     pacer: RateLimiter
+
+    def restart_schedule(self) -> None:
+        """A loop starts: the pacer's schedule from now, nothing owed
+        (:meth:`RateLimiter.restart`)."""
+        self.pacer.restart()
 
     @property
     def periods_behind(self) -> int:

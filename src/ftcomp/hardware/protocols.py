@@ -392,6 +392,11 @@ class ReportsLateness(Protocol):
         """The largest overrun seen [s] (0 when none)."""
         ...
 
+    def restart_schedule(self) -> None:
+        """A loop starts: the periods from now on, nothing owed for the time before (set-up,
+        or a pause since an earlier loop on the same robot)."""
+        ...
+
 
 @runtime_checkable
 class ChecksReachability(Protocol):
