@@ -65,11 +65,11 @@ def test_overruns_shorter_than_a_period_in_a_row_leave_the_loop_on_schedule() ->
 def test_a_stall_puts_the_loop_behind_by_its_length_and_the_slack_after_pays_it_back() -> None:
     clock = _Clock()
     limiter = RateLimiter(0.001, clock=clock, sleep=clock.sleep, log_overruns=False)
-    clock.now += 0.5  # the loop's set-up: its first cycle ends late, and that is no stall
-    limiter.sleep()
-    assert limiter.periods_behind == 0
+    clock.now += 0.5  # the loop's set-up, then the loop starts the schedule
+    limiter.restart()
     clock.now += 0.0004
     limiter.sleep()
+    assert limiter.periods_behind == 0
     clock.now += 0.0115  # a stall: 10.5 ms past the end of the first period
     limiter.sleep()
     assert limiter.periods_behind == 10

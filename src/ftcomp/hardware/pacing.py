@@ -79,8 +79,8 @@ class RateLimiter:
     the loop N periods behind, a few periods on time clear it, and a loop that overruns every
     period falls further behind each time. Overruns shorter than a period in a row (a wake-up
     or two late under load) leave it where it was: the kept schedule already carries them. The
-    schedule starts when the limiter is made: the first cycle's lateness (a loop's set-up) is no
-    stall.
+    schedule starts when the limiter is made; a loop starts it again with :meth:`restart`, so
+    that its set-up is no stall (:func:`ftcomp.control.loop.run_loop` does).
 
     Args:
         period_s: the loop period [s], > 0.
@@ -114,7 +114,6 @@ class RateLimiter:
         #: Cycles that overran since the start.
         self.overruns = 0
         self._behind_s = 0.0
-        self._first = True  # the time before the first cycle ends (a loop's set-up) is no stall
         #: The most negative slack seen [s].
         self.worst_slack_s = 0.0
 
@@ -124,7 +123,6 @@ class RateLimiter:
         slack = self._next - now
         self.slack_s = slack
         if slack >= 0.0:
-            self._first = False
             self._behind_s = max(0.0, self._behind_s - slack)  # idle time pays back a stall
             self._sleep(slack)
             self._next += self.period_s
@@ -135,12 +133,10 @@ class RateLimiter:
             _log.warning("%s is late by %.1f ms", self.name, -slack * 1e3)
             self._last_log = now
         if -slack > self.period_s:  # a stall: a new schedule from now, the time lost owed
-            if not self._first:
-                self._behind_s -= slack
+            self._behind_s -= slack
             self._next = now + self.period_s
         else:  # the schedule kept: the next period is shorter by the overrun
             self._next += self.period_s
-        self._first = False
         return slack
 
     def restart(self) -> None:
