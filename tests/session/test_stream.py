@@ -9,8 +9,16 @@ import pytest
 
 import ftcomp
 from ftcomp.compensation.bias_tracking import BiasTrackingConfig
+from ftcomp.control.loop import Reading
 from ftcomp.errors import ParameterError
-from ftcomp.session.stream import StreamConfig, StreamProgress, stream, stream_columns
+from ftcomp.hardware.protocols import WrenchSample
+from ftcomp.session.stream import (
+    StreamConfig,
+    StreamLogger,
+    StreamProgress,
+    stream,
+    stream_columns,
+)
 
 
 def test_a_stream_logs_every_reading_compensated_with_its_pose(tmp_path: Path) -> None:
@@ -33,6 +41,37 @@ def test_a_stream_logs_every_reading_compensated_with_its_pose(tmp_path: Path) -
     assert np.all(np.abs(contact.mean(axis=0)) < 0.05)
     assert progress and progress[-1].readings <= result.readings
     assert all(p.duration_s == 0.5 and p.lost_packets is None for p in progress)
+
+
+class _Readings:
+    """A sensor whose readings since the last call are given by the test."""
+
+    def __init__(self) -> None:
+        self.due: list[WrenchSample] = []
+
+    def read_new(self) -> list[WrenchSample]:
+        out, self.due = self.due, []
+        return out
+
+
+def _reading(now_ns: int) -> Reading:
+    zero = np.zeros(6)
+    return Reading(now_ns, now_ns, zero, zero, np.zeros(3), np.eye(3), np.eye(3))
+
+
+def test_a_late_last_cycle_still_logs_the_readings_stamped_before_the_end() -> None:
+    # A loop held up under load reaches the end 20 ms late: the readings of the 100 ms it
+    # streamed are all logged (and none after it), not those up to the previous cycle alone.
+    sensor, rows = _Readings(), list[list[float]]()
+    logger = StreamLogger(sensor, rows.append, 0.1, with_pose=False)  # type: ignore[arg-type]
+    ms = 1_000_000
+    assert logger(_reading(0)) is not None  # the first cycle: readings from now on
+    sensor.due = [WrenchSample(k * ms, np.full(6, float(k))) for k in range(1, 50)]
+    assert logger(_reading(50 * ms)) is not None
+    sensor.due = [WrenchSample(k * ms, np.full(6, float(k))) for k in range(50, 121)]
+    assert logger(_reading(120 * ms)) is None  # over: the stream ends
+    assert [round(row[0] * 1e3) for row in rows] == list(range(1, 100))
+    assert logger.count == 99
 
 
 def test_stream_configurations_are_checked() -> None:

@@ -73,7 +73,8 @@ def stream_columns(
 
 
 class StreamLogger:
-    """Logs every reading until ``duration_s`` has passed on the session's clock.
+    """Logs every reading stamped less than ``duration_s`` after the first cycle, on the
+    session's clock (the cycle that finds the time over still logs those that came before it).
 
     Args:
         sensor: the loop's sensor.
@@ -116,13 +117,16 @@ class StreamLogger:
             self.t0_ns = r.now_ns
             self.sensor.read_new()  # start with the readings from now on
         self.elapsed_s = (r.now_ns - self.t0_ns) * 1e-9
-        if r.now_ns - self.t0_ns >= self.duration_ns:
-            return None
+        over = r.now_ns - self.t0_ns >= self.duration_ns
+        samples = self.sensor.read_new()
+        if over:  # the readings stamped before the end still count, however late this cycle is
+            end_ns = self.t0_ns + self.duration_ns
+            samples = [s for s in samples if s.t_ns < end_ns]
         pose: list[float] = []
         if self.with_pose:
             pose = [*quat_from_matrix(r.R_base_sensor), *r.p_base_sensor.tolist()]
         online = self.online
-        for sample in self.sensor.read_new():
+        for sample in samples:
             w = sample.wrench_sensor
             row = [sample.t_ns * 1e-9, *w.tolist(), *pose]
             self.count += 1
@@ -140,7 +144,7 @@ class StreamLogger:
                     row += contact.tolist()
                 self.contact_force_N = float(np.linalg.norm(contact[:3]))
             self.write_row(row)
-        return self._zero
+        return None if over else self._zero
 
     def finish(self) -> None:
         """Log the rows still held back (the online estimate measuring the rate)."""
