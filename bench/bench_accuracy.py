@@ -27,12 +27,17 @@ on), 30 poses, 600 readings each, a pose every 2 s (as a robot-driven ``ftcomp r
 twin; from switching on, and 30 min later) and every 29.5 s (the Axia80 lab's hand-timed
 session), in units of one pose mean's noise; ``truth`` is the true tool, tilt and bias
 trajectory (the floor, measured: about 1), ``drift told`` a constant-bias fit of the readings
-with the true drift subtracted (the tool model's own share); then a calibration used 10 min after
-its session, with and without :class:`~ftcomp.compensation.bias_tracking.BiasTracker`.
+with the true drift subtracted (the tool model's own share). Two kinds of split: ``spanning``,
+the poses to calibrate include the session's first and last, so every held-out pose lies in
+the calibration's time window (what a calibration of the whole session is used for), and
+``random``, any poses, so some held-out poses lie before or after the calibration's window,
+where its bias is held by design. Then a calibration used 10 min after its session, with and
+without :class:`~ftcomp.compensation.bias_tracking.BiasTracker`.
 
 ``--recording SAMPLES.csv``: a recording with many readings a pose (``ftcomp record`` on
-``ftcomp twin --realistic-drift 1``), random splits of 9 poses to calibrate and the rest held
-out, in units of its floor: one pose mean's noise from the scatter within the poses.
+``ftcomp twin --realistic-drift 1``), spanning and random splits of 9 poses to calibrate and
+the rest held out, in units of its floor: one pose mean's noise from the scatter within the
+poses.
 """
 
 from __future__ import annotations
@@ -141,44 +146,61 @@ CASES = {
 
 def sim_table(seeds: int) -> None:
     from calibration.drift_data import NOISE_6
-    from calibration.sim_drift_data import PER_POSE, session, used_later
+    from calibration.sim_drift_data import PER_POSE, session, spanning_split, used_later
 
     floor = NOISE_6[0] / np.sqrt(PER_POSE)
     print(
         f"held-out force error / one pose mean's noise ({floor:.4f} N), 30 poses, "
-        f"median (min-max) over {seeds} seeds"
+        f"median (min-max) over {seeds} seeds; 'spanning': the poses to calibrate include the "
+        "session's first and last (every held-out pose inside its time window), 'random': any"
     )
     for label, (period, t0) in CASES.items():
-        out: dict[tuple[int, str], list[float]] = {}
+        out: dict[tuple[int, str, str], list[float]] = {}
         for seed in range(seeds):
             model, samples, drift = session(seed, 30, period, t0)
-            rng = np.random.default_rng(seed + 100)
+            told = replace(samples, wrench_sensor=samples.wrench_sensor - drift(samples.t))
+            rng, span_rng = np.random.default_rng(seed + 100), np.random.default_rng(seed + 200)
             for n in (9, 20):
                 order = rng.permutation(30)
-                out.setdefault((n, "truth"), []).append(
-                    truth_rms(samples, order[n:], model, drift) / floor
-                )
-                told = replace(samples, wrench_sensor=samples.wrench_sensor - drift(samples.t))
-                f, _ = held_out_rms(told, order[:n], order[n:], "none")
-                out.setdefault((n, "drift told"), []).append(f / floor)
-                for name in MODELS:
-                    f, _ = held_out_rms(samples, order[:n], order[n:], name)
-                    out.setdefault((n, name), []).append(f / floor)
+                splits = {
+                    "spanning": spanning_split(span_rng, 30, n),
+                    "random": np.split(order, [n]),
+                }
+                for kind, (train, test) in splits.items():
+                    cell = (n, kind)
+                    out.setdefault((*cell, "truth"), []).append(
+                        truth_rms(samples, test, model, drift) / floor
+                    )
+                    f, _ = held_out_rms(told, train, test, "none")
+                    out.setdefault((*cell, "drift told"), []).append(f / floor)
+                    for name in MODELS:
+                        f, _ = held_out_rms(samples, train, test, name)
+                        out.setdefault((*cell, name), []).append(f / floor)
         print(f"  {label}:")
-        for (n, name), v in out.items():
-            print(f"    {n:2d} poses  {name:15s} {np.median(v):5.2f} ({min(v):.2f}-{max(v):.2f})")
+        for (n, kind, name), v in out.items():
+            print(
+                f"    {n:2d} poses {kind:8s} {name:15s} {np.median(v):5.2f} "
+                f"({min(v):.2f}-{max(v):.2f})"
+            )
         sys.stdout.flush()
     print("a stochastic calibration of 12 poses used 10 min after its session, still and free")
-    print("for the last 30 s: bias force error / the same floor, untracked and tracked")
+    print(
+        "for the last 30 s: bias force error / the same floor, untracked, tracked, and "
+        "re-biased from the first 0.5 s then tracked"
+    )
+
+    def cell(values: list[float], digits: int) -> str:
+        return f"{np.median(values):.{digits}f} ({min(values):.{digits}f}-{max(values):.{digits}f})"
+
     for label, t0 in (("just switched on", 0.0), ("30 min after switching on", 1800.0)):
         uses = [used_later(seed, t0) for seed in range(seeds)]
         untracked = [u.untracked_N / floor for u in uses]
         tracked = [u.tracked_N / floor for u in uses]
+        rebiased = [u.rebiased_tracked_N / floor for u in uses]
         updated = [u.updates / u.readings for u in uses]
         print(
-            f"  {label}: untracked {np.median(untracked):.1f} ({min(untracked):.1f}-"
-            f"{max(untracked):.1f}), tracked {np.median(tracked):.2f} ({min(tracked):.2f}-"
-            f"{max(tracked):.2f}), readings that updated {np.median(updated):.0%}"
+            f"  {label}: untracked {cell(untracked, 1)}, tracked {cell(tracked, 2)} (readings "
+            f"that updated {np.median(updated):.0%}), re-biased and tracked {cell(rebiased, 2)}"
         )
 
 
@@ -197,15 +219,22 @@ def recording_table(path: Path, splits: int) -> None:
         for i in ids
     ]
     floor = float(np.sqrt(np.mean(np.square(se))))
+    from calibration.sim_drift_data import spanning_split
+
     rng = np.random.default_rng(0)
-    draws = [rng.permutation(len(ids)) for _ in range(splits)]
-    print(f"{path}: {len(ids)} poses, floor {floor:.4f} N; 9 poses to calibrate, {splits} splits")
-    for name in ("none", "linear", "stochastic"):
-        v = [held_out_rms(samples, d[:9], d[9:], name)[0] / floor for d in draws]
-        print(
-            f"  {name:10s} {np.median(v):5.2f} (10-90 %: {np.percentile(v, 10):.2f}-"
-            f"{np.percentile(v, 90):.2f})"
-        )
+    P = len(ids)
+    draws = {
+        "spanning": [spanning_split(rng, P, 9) for _ in range(splits)],
+        "random": [np.split(rng.permutation(P), [9]) for _ in range(splits)],
+    }
+    print(f"{path}: {P} poses, floor {floor:.4f} N; 9 poses to calibrate, {splits} splits")
+    for kind, pairs in draws.items():
+        for name in ("none", "linear", "stochastic"):
+            v = [held_out_rms(samples, train, test, name)[0] / floor for train, test in pairs]
+            print(
+                f"  {kind:8s} {name:10s} {np.median(v):5.2f} (10-90 %: "
+                f"{np.percentile(v, 10):.2f}-{np.percentile(v, 90):.2f})"
+            )
 
 
 def main() -> None:
@@ -213,7 +242,7 @@ def main() -> None:
     parser.add_argument("--real", type=Path, help="folder with the 100-pose recording")
     parser.add_argument("--splits", type=int, default=30)
     parser.add_argument("--sim", action="store_true")
-    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--recording", type=Path, help="a samples CSV with many readings a pose")
     args = parser.parse_args()
     if args.recording is not None:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from calibration.drift_data import NOISE_6
-from calibration.sim_drift_data import PER_POSE, session, subset
+from calibration.sim_drift_data import PER_POSE, session, spanning_split, subset
 from ftcomp.calibration.identify import calibrate, pose_means
 from ftcomp.calibration.identify_extended import calibrate_extended
 from ftcomp.calibration_record import StochasticBiasDrift
@@ -49,6 +49,27 @@ def test_stochastic_drift_beats_constant_and_quadratic_at_nine_poses() -> None:
     assert stochastic < np.median(errors["quadratic"])
     # Held-out poses before the first training pose get its bias held: a few floors at most.
     assert stochastic < 5 * floor
+
+
+@pytest.mark.parametrize("t0_s", [0.0, 1800.0], ids=["switch-on", "warmed"])
+def test_nine_poses_spanning_the_session_predict_within_1_2_times_the_floor(t0_s: float) -> None:
+    # Issue 24's goal: 9 poses at the record's pace (2 s a pose), the session's first and last
+    # among them, the other 21 held out, each predicted at its time. The median over 20 seeds
+    # (deterministic) measures 1.08x from switch-on and 1.07x 30 min later (means 1.13x);
+    # bench/bench_accuracy.py --sim prints the other models beside it.
+    floor = NOISE_6[0] / np.sqrt(PER_POSE)
+    errors = []
+    for seed in range(20):
+        _, samples, _ = session(seed, POSES, t0_s=t0_s)
+        train, test = spanning_split(np.random.default_rng(seed + 200), POSES, 9)
+        fit_on = subset(samples, np.isin(np.arange(POSES), train))
+        held = subset(samples, np.isin(np.arange(POSES), test))
+        result = calibrate_extended(fit_on, bias_drift="stochastic", leave_one_out=False)
+        ids, R, wrench, _, _ = pose_means(held)
+        t = np.array([held.t[held.pose == i].mean() for i in ids])
+        error = GravityCompensator(result).compensate(wrench, R, t_s=t)
+        errors.append(float(np.sqrt(np.mean(error[:, :3] ** 2))))
+    assert np.median(errors) < 1.2 * floor
 
 
 def test_stochastic_drift_at_twenty_poses_is_near_the_floor() -> None:

@@ -100,6 +100,7 @@ def test_a_protective_stop_stops_the_robot_and_exits_1_with_the_reason(
         (["--sensor", "netft://127.0.0.9"], "cannot share a session with this robot"),
         (["--sensor", "sim://", "--k2", "-1"], "--k2 must be >= 0"),
         (["--sensor", "sim://", "--axes", "q"], "unknown selection axis 'q'"),
+        (["--sensor", "sim://", "--rebias-s", "-1"], "--rebias-s must be in (0, 60] s"),
     ],
 )
 def test_bad_run_configurations_are_one_line_and_exit_2(

@@ -47,6 +47,17 @@ def test_tracking_keeps_a_calibration_ten_minutes_old_within_twice_the_floor() -
     )
 
 
+def test_right_after_switch_on_a_rebias_at_the_start_lets_tracking_follow() -> None:
+    # The same 10 minutes right after switching on move the z bias by about 1.1 N: beyond the
+    # contact threshold, so tracking alone never starts (the sensor looks touched). A re-bias
+    # from the first 0.5 s of the still readings (--rebias-s 0.5) starts it from the bias now.
+    use = used_later(11, 0.0)
+    floor = NOISE_6[0] / np.sqrt(PER_POSE)
+    assert use.updates == 0 and use.tracked_N == use.untracked_N > 100 * floor
+    assert use.rebiased_updates > 0.9 * (use.readings - 250)
+    assert use.rebiased_tracked_N < 2 * floor
+
+
 def test_no_update_in_contact_or_while_moving() -> None:
     model, samples, drift = session(12, 8)
     result = calibrate_extended(samples, bias_drift="stochastic", leave_one_out=False)

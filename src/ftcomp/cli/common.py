@@ -8,6 +8,8 @@ import sys
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
+from ftcomp.errors import ParameterError
+
 if TYPE_CHECKING:
     from ftcomp.calibration_record import Calibration
     from ftcomp.session.run import RunResult
@@ -17,7 +19,9 @@ if TYPE_CHECKING:
 
 __all__ = [
     "add_range_argument",
+    "add_rebias_argument",
     "add_track_bias_argument",
+    "check_rebias_argument",
     "live_end_lines",
     "parse_range",
     "print_warnings",
@@ -83,6 +87,30 @@ def add_track_bias_argument(parser: argparse.ArgumentParser) -> None:
         "for 0.5 s; at most 0.05 N/s, 2 N in all); the log gains bias_updated (default: off; "
         "a steady contact lighter than 1 N would be taken for bias)",
     )
+
+
+def add_rebias_argument(parser: argparse.ArgumentParser) -> None:
+    """``--rebias-s``: the calibration's bias re-estimated from still readings at the start."""
+    parser.add_argument(
+        "--rebias-s",
+        type=float,
+        metavar="SECONDS",
+        help="first re-estimate the calibration's bias from SECONDS of readings with the arm "
+        "still and nothing touching the tool (the tool model kept, gravity-aware; a drift "
+        "model dropped), then start from the bias now; with --track-bias, tracking follows "
+        "it from there (default: the calibration's bias)",
+    )
+
+
+def check_rebias_argument(args: argparse.Namespace) -> None:
+    """``--rebias-s`` needs a calibration and a duration > 0."""
+    seconds = args.rebias_s
+    if seconds is None:
+        return
+    if not args.calibration:
+        raise ParameterError("--rebias-s needs the tool's calibration (-c)")
+    if not (math.isfinite(seconds) and 0.0 < seconds <= 60.0):
+        raise ParameterError(f"--rebias-s must be in (0, 60] s, got {seconds:g}")
 
 
 def live_end_lines(result: LiveResult) -> list[str]:

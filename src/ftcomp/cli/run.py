@@ -26,7 +26,13 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from ftcomp.cli.common import add_track_bias_argument, live_end_lines, warn_live_drift
+from ftcomp.cli.common import (
+    add_rebias_argument,
+    add_track_bias_argument,
+    check_rebias_argument,
+    live_end_lines,
+    warn_live_drift,
+)
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import add_view_arguments
 from ftcomp.errors import ParameterError
@@ -61,6 +67,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         "compensate it too (default: off, the tool alone)",
     )
     add_track_bias_argument(parser)
+    add_rebias_argument(parser)
     p("--law", choices=_LAWS, default="combined", help="admittance law (default combined)")
     p("--axes", default="z", help="axes that yield to force, e.g. z or x,y,z,rz (default z)")
     p("--frame", choices=("base", "sensor"), default="base", help="axes of --axes (base)")
@@ -118,6 +125,7 @@ def register(parser: argparse.ArgumentParser) -> None:
 def _check(args: argparse.Namespace) -> None:
     if args.track_bias and args.online_load:
         raise ParameterError("--track-bias and --online-load: choose one")
+    check_rebias_argument(args)
     if len(args.wrench_desired) != 6 or not all(map(math.isfinite, args.wrench_desired)):
         raise ParameterError("--wrench-desired needs six finite numbers FX,FY,FZ,TX,TY,TZ")
     for name in ("k1", "k2", "k1_rot", "k2_rot", "damping", "stiffness"):
@@ -198,6 +206,7 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.io.atomic import check_writable
     from ftcomp.io.calibration_json import load_calibration
     from ftcomp.session.online_load import event_lines
+    from ftcomp.session.rebias_live import rebias_still
     from ftcomp.session.run import run_compliant
     from ftcomp.views.live import session_observers
 
@@ -207,13 +216,18 @@ def run(args: argparse.Namespace) -> int:
     if args.log is not None:
         check_writable(args.log, overwrite=args.force, inputs=[args.calibration, args.output])
     calibration = load_calibration(args.calibration)
-    warn_live_drift(calibration, args.calibration, tracking=args.track_bias)
+    if args.rebias_s is None:  # a re-bias drops the drift model
+        warn_live_drift(calibration, args.calibration, tracking=args.track_bias)
     with (
         session_observers(
             args.log, args.view, overwrite=args.force, control_frame=args.frame
         ) as observers,
         open_hardware(args) as (robot, sensor, mount),
     ):
+        if args.rebias_s is not None:
+            rebiased = rebias_still(robot, sensor, calibration, args.rebias_s, mount=mount)
+            print(rebiased.line(), flush=True)
+            calibration = rebiased.calibration
         print(
             f"{'dry run' if args.dry_run else 'running'}: {args.law} admittance on "
             f"{args.axes} ({args.frame} frame), calibration {args.calibration}",

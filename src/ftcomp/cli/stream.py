@@ -24,7 +24,13 @@ import math
 import sys
 from typing import TYPE_CHECKING
 
-from ftcomp.cli.common import add_track_bias_argument, live_end_lines, warn_live_drift
+from ftcomp.cli.common import (
+    add_rebias_argument,
+    add_track_bias_argument,
+    check_rebias_argument,
+    live_end_lines,
+    warn_live_drift,
+)
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import StatusLine, add_view_arguments
 from ftcomp.errors import ParameterError
@@ -65,6 +71,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         "then logged)",
     )
     add_track_bias_argument(parser)
+    add_rebias_argument(parser)
     parser.add_argument("--seconds", type=float, required=True, help="how long to log [s]")
     parser.add_argument(
         "-o", "--output", required=True, metavar="LOG.csv", help="the log, one row per reading"
@@ -89,6 +96,7 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.io.atomic import check_writable
     from ftcomp.io.calibration_json import load_calibration
     from ftcomp.session.online_load import event_lines
+    from ftcomp.session.rebias_live import rebias_still
     from ftcomp.session.stream import StreamConfig, stream
     from ftcomp.views.live import session_observers
 
@@ -101,6 +109,7 @@ def run(args: argparse.Namespace) -> int:
             "--online-load needs the tool's calibration: give -c CALIBRATION.json "
             "(from ftcomp calibrate)"
         )
+    check_rebias_argument(args)
     if not (math.isfinite(args.seconds) and args.seconds > 0.0):
         raise ParameterError(f"--seconds must be > 0, got {args.seconds:g}")
     rate = args.online_rate_hz
@@ -118,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     if args.log is not None:
         check_writable(args.log, overwrite=args.force, inputs=[*inputs, args.output])
     calibration = load_calibration(args.calibration) if args.calibration else None
-    if calibration is not None:
+    if calibration is not None and args.rebias_s is None:  # a re-bias drops the drift model
         warn_live_drift(calibration, args.calibration, tracking=args.track_bias)
     if calibration is not None and args.robot is None:
         raise ParameterError(
@@ -137,6 +146,10 @@ def run(args: argparse.Namespace) -> int:
         session_observers(args.log, args.view, overwrite=args.force) as observers,
         open_hardware(args, check_pose) as (robot, sensor, mount),
     ):
+        if calibration is not None and args.rebias_s is not None:
+            rebiased = rebias_still(robot, sensor, calibration, args.rebias_s, mount=mount)
+            print(rebiased.line(), flush=True)
+            calibration = rebiased.calibration
         try:
             result = stream(
                 robot,
