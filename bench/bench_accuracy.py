@@ -3,7 +3,7 @@
 Run by hand (not a test)::
 
     .venv/bin/python bench/bench_accuracy.py --real DIR [--splits 30]
-    .venv/bin/python bench/bench_accuracy.py --sim [--seeds 5]
+    .venv/bin/python bench/bench_accuracy.py --sim [--seeds 20]
     .venv/bin/python bench/bench_accuracy.py --recording SAMPLES.csv [--splits 30]
 
 ``--real DIR``: a directory with ``recorded_messages_pose_100.txt`` (x, y, z, qx, qy, qz, qw:
