@@ -148,9 +148,8 @@ def test_every_control_call_the_backend_makes_exists_with_that_signature(
     with running("fake_ur", host, _scenario().to_json()):
         for command in ("speedl", "servol"):
             with open_robot(f"ur://{host}?command={command}") as robot:
-                here = robot.pose()
-                target = here.p_base_tcp + np.array([0.0, 0.0, 0.01])
-                robot.move_pose(target, here.R_base_tcp, 1.0)
+                here = robot.pose()  # the stand-in's arm does not move: moveL to where it is
+                robot.move_pose(here.p_base_tcp, here.R_base_tcp, 1.0)
                 robot.command_twist(np.array([0.0, 0.0, -0.005, 0.0, 0.0, 0.01]))
                 robot.wait_cycle()
                 robot.command_twist(np.array([0.0, 0.0, -0.005, 0.0, 0.0, 0.01]))
@@ -185,6 +184,20 @@ def test_an_unreachable_pose_is_refused_before_any_move(
         with pytest.raises(UnreachablePoseError, match="not reachable"):
             robot.move_pose(here.p_base_tcp, here.R_base_tcp, 1.0)
     assert "moveL" not in CheckedControl.calls
+
+
+def test_a_move_that_ends_away_from_its_target_is_an_error(
+    request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """moveL reported done but the arm is not there (the twin's arm held by a joint limit, seen
+    at designed poses 12 of 30): an error, not a recording at the wrong pose."""
+    monkeypatch.setattr(rtde_control, "RTDEControlInterface", CheckedControl)
+    host = loopback_address(request.node.name)
+    with running("fake_ur", host, _scenario().to_json()), open_robot(f"ur://{host}") as robot:
+        here = robot.pose()  # the stand-in's arm stays here whatever moveL says
+        robot.move_pose(here.p_base_tcp + np.array([0.0, 0.0, 0.0005]), here.R_base_tcp, 1.0)
+        with pytest.raises(HardwareError, match=r"moveL ended 10\.0 mm and 0\.0 deg from its"):
+            robot.move_pose(here.p_base_tcp + np.array([0.0, 0.0, 0.01]), here.R_base_tcp, 1.0)
 
 
 @pytest.mark.parametrize("command", ["speedl", "servol"])

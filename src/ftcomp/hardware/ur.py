@@ -74,6 +74,10 @@ _STILL_FOR_S = 0.1
 #: moveL turns the tool at this many rad/s per m/s of its speed parameter (UR's trajectory
 #: generator: angular speed = 4 x linear speed, in rad/s).
 _MOVEL_RAD_PER_M = 4.0
+#: How far from its target a finished moveL may leave the TCP [m, rad]: a controller ends moveL
+#: at the target; further, and the arm did not get there (a joint limit, a singularity).
+_ARRIVED_M = 1e-3
+_ARRIVED_RAD = math.radians(0.5)
 
 
 #: RTDE ``safety_status_bits``: protective stopped (bit 2), emergency stopped (bit 7), as
@@ -284,7 +288,8 @@ class URRobot(LatenessOfPacer):
         Raises:
             UnreachablePoseError: no inverse kinematics or outside the safety limits (checked
                 before moving).
-            HardwareError: the move failed or the connection was lost.
+            HardwareError: the move failed, ended away from its target, or the connection was
+                lost.
         """
         p = np.asarray(p_base_tcp, dtype=float)
         R = np.asarray(R_base_tcp, dtype=float)
@@ -305,6 +310,15 @@ class URRobot(LatenessOfPacer):
         self.check()
         if not ok:
             raise HardwareError(f"{self.uri.text!r}: moveL did not complete")
+        at = self.pose()
+        off_m = float(np.linalg.norm(at.p_base_tcp - p))
+        off_rad = float(Rotation.from_matrix(R @ at.R_base_tcp.T).magnitude())
+        if off_m > _ARRIVED_M or off_rad > _ARRIVED_RAD:
+            raise HardwareError(
+                f"{self.uri.text!r}: moveL ended {off_m * 1e3:.1f} mm and "
+                f"{math.degrees(off_rad):.1f} deg from its target (a joint limit or a "
+                "singularity on the way?)"
+            )
 
     def settle(self, max_duration_s: float) -> float:
         """Wait until every joint is slower than 2 mrad/s for 0.1 s; return the time taken [s].
