@@ -83,6 +83,6 @@ def test_a_sensor_fault_ends_run_in_the_period_that_sees_it(fault: str, tmp_path
 
 
 def test_added_latency_within_the_limits_is_no_fault(tmp_path: Path) -> None:
-    done, t_s = _run_with_fault("latency", tmp_path)  # RTDE packages 8-12 ms late
+    done, t_s = _run_with_fault("latency", tmp_path)  # RTDE packages 8-14 ms late
     assert done.returncode == 0, done.stdout + done.stderr
     assert SECONDS - 0.1 <= t_s[-1] <= SECONDS + 0.1, t_s[-1]  # it ran its time

@@ -93,7 +93,8 @@ FAULTS: Final = {
     "rtde-stop": "the controller stops sending RTDE data (connections stay open)",
     "protective-stop": "a protective stop: the arm stops, the program ends",
     "script-stop": "the program is stopped from the pendant",
-    "latency": "every RTDE package is sent 8 ms late (and jitters by up to 4 ms)",
+    "latency": "every RTDE package is sent 8-14 ms late (8 ms, up to 4 ms of jitter, in the "
+    "cell's 2 ms cycles)",
 }
 _CYCLE_S: Final = 0.002
 _VERSION: Final = (5, 11, 1, 108318)
@@ -391,10 +392,13 @@ class _Twin:
         self.fault_fired = False
         self.rtde_silent = False
         self.latency = False
+        #: The latency fault's packages held back: (due time, state, registers), in order; the
+        #: cell's loop sends each in its first cycle past its due time (no thread of its own: one
+        #: holding the interpreter's lock while preempted held up the cell, and with it the Net
+        #: F/T's stream, which the fault must leave alone).
         self.delayed: collections.deque[tuple[float, dict[str, object], dict[str, Any]]] = (
             collections.deque()
         )
-        self.delayed_ready = threading.Condition()
         threading.Thread(
             target=accept_forever, args=(ports["rtde"], self._rtde_session), daemon=True
         ).start()
@@ -433,7 +437,6 @@ class _Twin:
             self.controller.stop_program()
         elif fault == "latency":
             self.latency = True
-            threading.Thread(target=self._publish_delayed, daemon=True).start()
 
     def state(self) -> dict[str, object]:
         cell, ctl = self.cell, self.controller
@@ -480,18 +483,6 @@ class _Twin:
             sessions = list(self.sessions)
         for session in sessions:
             session.publish(state, registers)
-
-    def _publish_delayed(self) -> None:
-        """The latency fault's sender: each package at its due time, in order."""
-        while True:
-            with self.delayed_ready:
-                while not self.delayed:
-                    self.delayed_ready.wait()
-                due, state, registers = self.delayed.popleft()
-            wait = due - time.monotonic()
-            if wait > 0:
-                time.sleep(wait)
-            self._publish(state, registers)
 
     def finish(self, result: TwinResult) -> TwinResult:
         """Stop the program and the Net F/T; the result with the records it sent."""
@@ -577,10 +568,13 @@ class _Twin:
                 state = self.state()
                 registers = {**ctl.inputs, **ctl.registers}
                 if self.latency:  # the network holds the package back; the cell goes on
-                    due = time.monotonic() + 0.008 + 0.004 * float(rng.random())
-                    with self.delayed_ready:
-                        self.delayed.append((due, state, registers))
-                        self.delayed_ready.notify()
+                    now = time.monotonic()
+                    self.delayed.append(
+                        (now + 0.008 + 0.004 * float(rng.random()), state, registers)
+                    )
+                    while self.delayed and self.delayed[0][0] <= now:
+                        _, late_state, late_registers = self.delayed.popleft()
+                        self._publish(late_state, late_registers)
                 else:
                     self._publish(state, registers)
             if log is not None:
