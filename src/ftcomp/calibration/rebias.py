@@ -18,7 +18,7 @@ from ftcomp.errors import IdentificationError
 from ftcomp.model import GravityModel
 from ftcomp.samples import Samples
 
-__all__ = ["bias_from_still", "rebias"]
+__all__ = ["bias_from_still", "bias_of", "rebias"]
 
 
 def bias_from_still(
@@ -41,6 +41,15 @@ def bias_from_still(
     n = len(estimate)
     se = estimate.std(axis=0, ddof=1) / math.sqrt(n) if n > 1 else np.full(6, np.nan)
     return estimate.mean(axis=0), se
+
+
+def bias_of(calibration: Calibration) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A calibration's bias ``[F0, M0]`` and its standard errors, each (6,)."""
+    m, se = calibration.model, calibration.std_errors
+    return (
+        np.concatenate([m.force_bias_N, m.torque_bias_Nm]),
+        np.concatenate([se.force_bias_N, se.torque_bias_Nm]),
+    )
 
 
 def rebias(calibration: Calibration, samples: Samples) -> Calibration:

@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
-from ftcomp.calibration.rebias import rebias
+from ftcomp.calibration.rebias import bias_of, rebias
 from ftcomp.cli.common import print_warnings
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.calibration_json import load_calibration, save_calibration
@@ -54,9 +52,8 @@ def run(args: argparse.Namespace) -> int:
     print_warnings(samples.warnings)
     new = rebias(calibration, samples)
     save_calibration(output, new)
-    old_bias = np.concatenate([calibration.model.force_bias_N, calibration.model.torque_bias_Nm])
-    new_bias = np.concatenate([new.model.force_bias_N, new.model.torque_bias_Nm])
-    se = np.concatenate([new.std_errors.force_bias_N, new.std_errors.torque_bias_Nm])
+    old_bias, _ = bias_of(calibration)
+    new_bias, se = bias_of(new)
     print(f"bias re-estimated from {len(samples)} readings (tool model kept):")
     for name, old, value, error in zip(WRENCH_COLUMNS, old_bias, new_bias, se, strict=True):
         unit = "N" if name.startswith("f") else "N·m"

@@ -20,7 +20,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
-from ftcomp.calibration.rebias import rebias
+from ftcomp.calibration.rebias import bias_of, rebias
 from ftcomp.calibration_record import Calibration
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
@@ -124,10 +124,5 @@ def rebias_still(
         raise HardwareError("the sensor sent non-finite readings while the bias was read")
     samples = Samples(wrench, np.array(rotations), "quaternion", source="the still readings")
     new_calibration = rebias(calibration, samples)
-    old, now = calibration.model, new_calibration.model
-    shift = np.concatenate(
-        [now.force_bias_N - old.force_bias_N, now.torque_bias_Nm - old.torque_bias_Nm]
-    )
-    se = new_calibration.std_errors
-    std_errors = np.concatenate([se.force_bias_N, se.torque_bias_Nm])
-    return Rebiased(new_calibration, shift, std_errors, len(wrenches))
+    (old, _), (now, std_errors) = bias_of(calibration), bias_of(new_calibration)
+    return Rebiased(new_calibration, now - old, std_errors, len(wrenches))
