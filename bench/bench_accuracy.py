@@ -204,13 +204,25 @@ def sim_table(seeds: int) -> None:
         )
 
 
+def in_recording_order(samples: Samples) -> Samples:
+    """The poses renamed ``p0, p1, ...`` in the order they were recorded (by their first
+    reading's time): the splits take the session's first and last pose by number, and a
+    design's names (``d1, d10, d20, ...`` in the order ``record`` visits them) are not in time
+    order."""
+    assert samples.pose is not None and samples.t is not None
+    names, first = np.unique(samples.pose, return_index=True)
+    order = names[np.argsort(samples.t[first])]
+    rank = {name: f"p{k}" for k, name in enumerate(order.tolist())}
+    return replace(samples, pose=np.array([rank[name] for name in samples.pose.tolist()]))
+
+
 def recording_table(path: Path, splits: int) -> None:
     """Held-out force error of a recording with many readings a pose (e.g. ``ftcomp record``
     on ``ftcomp twin --realistic-drift 1``), 9 poses to calibrate, in units of its floor: one
     pose mean's noise from the scatter within the poses."""
     from ftcomp.io.samples_csv import read_samples
 
-    samples = read_samples(path)
+    samples = in_recording_order(read_samples(path))
     assert samples.pose is not None
     ids = np.unique(samples.pose)
     se = [
