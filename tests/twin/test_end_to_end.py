@@ -14,11 +14,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from scipy import stats
 
 pytest.importorskip("rtde_control")
 pytest.importorskip("pynetft")
 pytest.importorskip("mujoco")
 
+from ftcomp.calibration.identify import pose_means
+from ftcomp.calibration.methods import fit_method
+from ftcomp.io.samples_csv import read_samples
 from standins.twin_process import running_twin
 
 TILT = "--tilt-deg=-0.204,-0.129"
@@ -62,11 +66,15 @@ def calibrated(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
 #: The 13 identified numbers are checked at once, each a t-statistic with 42 degrees of freedom
 #: (the covariance is scaled by the residual variance of 54 numbers less 12 parameters). At 3
 #: standard errors each, 5.8 % of correct calibrations would fail one of the 13; the bound that
-#: keeps the family's false alarms at 3 sigma's 0.27 % is t(42) at 1 - 0.0027 / 26: 4.06. The RMS
-#: of the 13 catches standard errors that are small across the board (chi-square: beyond 1.8
-#: 0.006 % of the time). Measured under two busy loops: 25 recordings, RMS 0.96, largest 2.8.
+#: keeps the family's false alarms at 3 sigma's 0.27 % is t(42) at 1 - 0.0027 / 26: 4.06.
 Z_MAX = 4.06
-Z_RMS_MAX = 1.8
+#: The 12 parameters together: their Mahalanobis distance from the truth through the fit's own
+#: covariance, over 12, is F(12, 42) for a correct calibration (the numbers are strongly
+#: correlated, weight with gravity's z at -1.0 and the torque bias with the centre of gravity at
+#: -0.96, so no sum of their squares alone has a known law). It catches standard errors too
+#: small across the board; beyond F's 1 - 0.0027 quantile, 3.18, 0.27 % of the time. Measured
+#: under two busy loops: 25 recordings, mean 1.00 (1.05 expected), largest 2.02.
+F_QUANTILE = 1.0 - 0.0027
 
 
 def test_record_then_calibrate_recovers_the_twins_truth_within_its_standard_errors(
@@ -74,13 +82,19 @@ def test_record_then_calibrate_recovers_the_twins_truth_within_its_standard_erro
 ) -> None:
     calibration, truth = calibrated
     found, true = json.loads(calibration.read_text()), json.loads(truth.read_text())
-    z = []
     for key in (*KEYS, "gravity_in_base_N"):
         error = np.atleast_1d(found[key]) - np.atleast_1d(true[key])
         se = np.atleast_1d(found["std_errors"][key])
         assert np.all(np.abs(error) <= Z_MAX * se), (key, error, se)
-        z.extend(error / se)
-    assert len(z) == 13 and np.sqrt(np.mean(np.square(z))) <= Z_RMS_MAX, z
+    # The joint fit again (what ``calibrate`` ran) for its whole covariance.
+    ids, R, wrench, count, var_mean = pose_means(read_samples(calibration.parent / "s.csv"))
+    fit, _ = fit_method("joint", wrench, R, var_mean, count)
+    assert np.allclose(fit.theta[:3], found["gravity_in_base_N"], rtol=1e-9, atol=1e-12)
+    keys = ("gravity_in_base_N", "force_bias_N", "torque_bias_Nm", "center_of_gravity_m")
+    error = fit.theta[:12] - np.concatenate([true[key] for key in keys])
+    f = float(error @ np.linalg.solve(fit.covariance[:12, :12], error)) / 12
+    dof = 6 * len(ids) - 12
+    assert f <= stats.f.ppf(F_QUANTILE, 12, dof), (f, dof)
 
 
 #: The paper's gains per surface (``ftcomp sim place``'s defaults): on the stiff book K1 = 0 and
