@@ -4,7 +4,7 @@ Run by hand (not a test)::
 
     .venv/bin/python bench/bench_accuracy.py --real DIR [--splits 30]
     .venv/bin/python bench/bench_accuracy.py --sim [--seeds 20]
-    .venv/bin/python bench/bench_accuracy.py --recording SAMPLES.csv [--splits 30]
+    .venv/bin/python bench/bench_accuracy.py --recording SAMPLES.csv [--splits 30] [--twin-seed S]
 
 ``--real DIR``: a directory with ``recorded_messages_pose_100.txt`` (x, y, z, qx, qy, qz, qw:
 the sensor frame in the robot base frame) and ``recorded_messages_wrench_100.txt`` (fx..tz in
@@ -59,6 +59,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from calibration.sim_drift_data import subset
 
 MODELS = ("none", "quadratic", "stochastic", "stochastic+map")
+#: The tilt the twin recordings of docs/calibration.md were made with (the paper's) [deg].
+TWIN_TILT_DEG = (-0.204, -0.129)
 
 
 def read_real(folder: Path) -> Samples:
@@ -216,7 +218,7 @@ def in_recording_order(samples: Samples) -> Samples:
     return replace(samples, pose=np.array([rank[name] for name in samples.pose.tolist()]))
 
 
-def recording_table(path: Path, splits: int) -> None:
+def recording_table(path: Path, splits: int, twin_seed: int | None = None) -> None:
     """Held-out force error of a recording with many readings a pose (e.g. ``ftcomp record``
     on ``ftcomp twin --realistic-drift 1``), 9 poses to calibrate, in units of its floor: one
     pose mean's noise from the scatter within the poses."""
@@ -247,6 +249,68 @@ def recording_table(path: Path, splits: int) -> None:
                 f"  {kind:8s} {name:10s} {np.median(v):5.2f} (10-90 %: "
                 f"{np.percentile(v, 10):.2f}-{np.percentile(v, 90):.2f})"
             )
+    if twin_seed is not None:
+        twin_truth_table(samples, twin_seed, TWIN_TILT_DEG)
+
+
+def twin_truth_table(samples: Samples, seed: int, tilt_deg: tuple[float, float]) -> None:
+    """A twin recording against the twin's own truth, rebuilt in process (the tool, the tilt,
+    and the sensor's drift: a function of the seed and the sensor's clock alone, the clock's
+    offset to the recording's fitted); then the 9-pose figure of the pure simulator with that
+    drift, those orientations and those times."""
+    from scipy.optimize import minimize_scalar
+
+    from calibration.drift_data import readings
+    from calibration.sim_drift_data import PER_POSE, spanning_split
+    from ftcomp.twin.serve import TwinConfig
+
+    cell = TwinConfig(realistic_drift=1.0, seed=seed, tilt_deg=tilt_deg).open_cell()
+    model, sensor = cell.true_gravity_model(), cell.sensor
+    rate = sensor.spec.output_rate_Hz
+
+    def drift(t_s: np.ndarray) -> np.ndarray:
+        ticks = np.rint(np.maximum(np.asarray(t_s, dtype=float), 0.0) * rate).astype(int)
+        first = int(ticks.min())
+        return sensor.drift(first, int(ticks.max()) - first + 1)[ticks - first]
+
+    ids, R, wrench, _, var = pose_means(samples)
+    t = np.array([samples.t[samples.pose == i].mean() for i in ids])  # type: ignore[index]
+    order = np.argsort(t)
+    R, wrench, se, t = R[order], wrench[order], np.sqrt(var[order]), t[order]
+    left = wrench - model.predict(R)
+
+    def misfit(offset: float) -> float:
+        return float(np.sum(((left - drift(t - offset))[:, :3] / se[:, :3]) ** 2))
+
+    offset = minimize_scalar(misfit, bounds=(t[0] - 600.0, t[0]), method="bounded").x
+    z = (left - drift(t - offset)) / se
+    print(
+        f"  against the twin's truth (seed {seed}; the recording starts {t[0] - offset:.1f} s "
+        f"after the sensor's switch-on): pose means' z RMS, force "
+        f"{np.sqrt(np.mean(z[:, :3] ** 2, axis=0)).round(2)}, torque "
+        f"{np.sqrt(np.mean(z[:, 3:] ** 2, axis=0)).round(2)} (1 if the twin were its model)"
+    )
+    period = float(np.mean(np.diff(t)))
+    sim = readings(
+        np.random.default_rng(seed),
+        model,
+        R,
+        PER_POSE,
+        t0_s=t[0] - offset,
+        pose_period_s=period,
+        rate_hz=rate,
+        drift=drift,
+    )
+    floor = float(np.sqrt(np.mean(pose_means(sim)[4][:, :3])))
+    rng = np.random.default_rng(0)
+    v = [
+        held_out_rms(sim, train, test, "stochastic")[0] / floor
+        for train, test in (spanning_split(rng, len(R), 9) for _ in range(30))
+    ]
+    print(
+        f"  the simulator with this drift, these orientations and {period:.2f} s a pose: "
+        f"spanning stochastic {np.median(v):.2f}"
+    )
 
 
 def main() -> None:
@@ -256,9 +320,15 @@ def main() -> None:
     parser.add_argument("--sim", action="store_true")
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--recording", type=Path, help="a samples CSV with many readings a pose")
+    parser.add_argument(
+        "--twin-seed",
+        type=int,
+        help="the recording is from `ftcomp twin --realistic-drift 1 --seed S "
+        "--tilt-deg=-0.204,-0.129`: compare it with the twin's truth",
+    )
     args = parser.parse_args()
     if args.recording is not None:
-        recording_table(args.recording, args.splits)
+        recording_table(args.recording, args.splits, args.twin_seed)
     if args.real is not None:
         real_table(read_real(args.real), args.splits)
     if args.sim:
