@@ -264,7 +264,10 @@ def twin_truth_table(samples: Samples, seed: int, tilt_deg: tuple[float, float])
     from calibration.sim_drift_data import PER_POSE, spanning_split
     from ftcomp.twin.serve import TwinConfig
 
-    cell = TwinConfig(realistic_drift=1.0, seed=seed, tilt_deg=tilt_deg).open_cell()
+    config = TwinConfig(
+        "127.0.0.1", "127.0.0.2", 1.0, realistic_drift=1.0, seed=seed, tilt_deg=tilt_deg
+    )
+    cell = config.open_cell()  # the cell alone: nothing is bound
     model, sensor = cell.true_gravity_model(), cell.sensor
     rate = sensor.spec.output_rate_Hz
 
