@@ -5,6 +5,7 @@ Run by hand (not a test)::
     .venv/bin/python bench/bench_accuracy.py --real DIR [--splits 30]
     .venv/bin/python bench/bench_accuracy.py --sim [--seeds 20]
     .venv/bin/python bench/bench_accuracy.py --recording SAMPLES.csv [--splits 30] [--twin-seed S]
+    .venv/bin/python bench/bench_accuracy.py --sim-recordings 20 [--splits 30]
 
 ``--real DIR``: a directory with ``recorded_messages_pose_100.txt`` (x, y, z, qx, qy, qz, qw:
 the sensor frame in the robot base frame) and ``recorded_messages_wrench_100.txt`` (fx..tz in
@@ -37,7 +38,13 @@ without :class:`~ftcomp.compensation.bias_tracking.BiasTracker`.
 ``--recording SAMPLES.csv``: a recording with many readings a pose (``ftcomp record`` on
 ``ftcomp twin --realistic-drift 1``), spanning and random splits of 9 poses to calibrate and
 the rest held out, in units of its floor: one pose mean's noise from the scatter within the
-poses.
+poses. The poses are taken in the order they were recorded. ``--twin-seed S``: the recording is
+from ``ftcomp twin --realistic-drift 1 --seed S --tilt-deg=-0.204,-0.129``; compare its pose
+means with the twin's own truth (the tool, the tilt and the sensor's drift, rebuilt in process)
+and give the pure simulator's figure with the same drift, orientations and times.
+
+``--sim-recordings SEEDS``: ``--recording``'s figure (the median over one recording's splits)
+on SEEDS simulated recordings at the twin's pace, to set one twin recording's figure beside.
 """
 
 from __future__ import annotations
@@ -61,6 +68,8 @@ from calibration.sim_drift_data import subset
 MODELS = ("none", "quadratic", "stochastic", "stochastic+map")
 #: The tilt the twin recordings of docs/calibration.md were made with (the paper's) [deg].
 TWIN_TILT_DEG = (-0.204, -0.129)
+#: Their pace: 30 designed poses, 600 readings each, ``--move-s 1.5``, 2.4 s a pose (measured).
+TWIN_POSE_PERIOD_S = 2.4
 
 
 def read_real(folder: Path) -> Samples:
@@ -218,25 +227,23 @@ def in_recording_order(samples: Samples) -> Samples:
     return replace(samples, pose=np.array([rank[name] for name in samples.pose.tolist()]))
 
 
+def scatter_floor(samples: Samples) -> float:
+    """One pose mean's force noise [N] from the scatter within the poses (RMS over poses and
+    axes)."""
+    return float(np.sqrt(np.mean(pose_means(samples)[4][:, :3])))
+
+
 def recording_table(path: Path, splits: int, twin_seed: int | None = None) -> None:
     """Held-out force error of a recording with many readings a pose (e.g. ``ftcomp record``
     on ``ftcomp twin --realistic-drift 1``), 9 poses to calibrate, in units of its floor: one
     pose mean's noise from the scatter within the poses."""
+    from calibration.sim_drift_data import spanning_split
     from ftcomp.io.samples_csv import read_samples
 
     samples = in_recording_order(read_samples(path))
-    assert samples.pose is not None
-    ids = np.unique(samples.pose)
-    se = [
-        samples.wrench_sensor[samples.pose == i, :3].std(axis=0, ddof=1)
-        / np.sqrt(np.sum(samples.pose == i))
-        for i in ids
-    ]
-    floor = float(np.sqrt(np.mean(np.square(se))))
-    from calibration.sim_drift_data import spanning_split
-
+    floor = scatter_floor(samples)
     rng = np.random.default_rng(0)
-    P = len(ids)
+    P = len(np.unique(samples.pose))  # type: ignore[arg-type]
     draws = {
         "spanning": [spanning_split(rng, P, 9) for _ in range(splits)],
         "random": [np.split(rng.permutation(P), [9]) for _ in range(splits)],
@@ -253,6 +260,34 @@ def recording_table(path: Path, splits: int, twin_seed: int | None = None) -> No
         twin_truth_table(samples, twin_seed, TWIN_TILT_DEG)
 
 
+def spanning_median(samples: Samples, splits: int) -> float:
+    """The median over ``splits`` spanning splits (9 poses to calibrate) of the stochastic
+    model's held-out force error, in units of the scatter floor: ``--recording``'s figure."""
+    from calibration.sim_drift_data import spanning_split
+
+    rng = np.random.default_rng(0)
+    P = len(np.unique(samples.pose))  # type: ignore[arg-type]
+    floor = scatter_floor(samples)
+    pairs = [spanning_split(rng, P, 9) for _ in range(splits)]
+    return float(
+        np.median([held_out_rms(samples, tr, te, "stochastic")[0] / floor for tr, te in pairs])
+    )
+
+
+def sim_recordings_table(seeds: int, splits: int) -> None:
+    """``--recording``'s figure (one recording, the median over its splits) on simulated
+    recordings at the twin's pace, one per seed: how far one recording's figure spreads."""
+    from calibration.sim_drift_data import session
+
+    v = [spanning_median(session(seed, 30, TWIN_POSE_PERIOD_S)[1], splits) for seed in range(seeds)]
+    print(
+        f"simulated recordings at {TWIN_POSE_PERIOD_S} s a pose from switch-on, 30 poses, "
+        f"stochastic, 9 spanning poses, median over {splits} splits each: median over {seeds} "
+        f"seeds {np.median(v):.2f} ({min(v):.2f}-{max(v):.2f}); "
+        f"{np.mean(np.array(v) <= 1.2):.0%} of recordings within 1.2x"
+    )
+
+
 def twin_truth_table(samples: Samples, seed: int, tilt_deg: tuple[float, float]) -> None:
     """A twin recording against the twin's own truth, rebuilt in process (the tool, the tilt,
     and the sensor's drift: a function of the seed and the sensor's clock alone, the clock's
@@ -261,7 +296,7 @@ def twin_truth_table(samples: Samples, seed: int, tilt_deg: tuple[float, float])
     from scipy.optimize import minimize_scalar
 
     from calibration.drift_data import readings
-    from calibration.sim_drift_data import PER_POSE, spanning_split
+    from calibration.sim_drift_data import PER_POSE
     from ftcomp.twin.serve import TwinConfig
 
     config = TwinConfig(
@@ -304,15 +339,9 @@ def twin_truth_table(samples: Samples, seed: int, tilt_deg: tuple[float, float])
         rate_hz=rate,
         drift=drift,
     )
-    floor = float(np.sqrt(np.mean(pose_means(sim)[4][:, :3])))
-    rng = np.random.default_rng(0)
-    v = [
-        held_out_rms(sim, train, test, "stochastic")[0] / floor
-        for train, test in (spanning_split(rng, len(R), 9) for _ in range(30))
-    ]
     print(
         f"  the simulator with this drift, these orientations and {period:.2f} s a pose: "
-        f"spanning stochastic {np.median(v):.2f}"
+        f"spanning stochastic {spanning_median(sim, 30):.2f}"
     )
 
 
@@ -323,6 +352,12 @@ def main() -> None:
     parser.add_argument("--sim", action="store_true")
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--recording", type=Path, help="a samples CSV with many readings a pose")
+    parser.add_argument(
+        "--sim-recordings",
+        type=int,
+        metavar="SEEDS",
+        help="--recording's figure on SEEDS simulated recordings at the twin's pace",
+    )
     parser.add_argument(
         "--twin-seed",
         type=int,
@@ -336,6 +371,8 @@ def main() -> None:
         real_table(read_real(args.real), args.splits)
     if args.sim:
         sim_table(args.seeds)
+    if args.sim_recordings:
+        sim_recordings_table(args.sim_recordings, args.splits)
 
 
 if __name__ == "__main__":
