@@ -93,3 +93,26 @@ def test_the_twin_answers_reachability_and_safety_limits(clients) -> None:
     assert control.isPoseWithinSafetyLimits(pose)
     assert not control.getInverseKinematicsHasSolution([3.0, 0.0, 0.3, *pose[3:]])
     assert receive.getSafetyMode() == 1
+
+
+def test_a_moveL_that_a_joint_limit_holds_ends_the_program_as_a_ur_controller_does() -> None:
+    """Turning the tool 170 deg about its axis three times winds wrist 3 past its 360 deg: the
+    third moveL stops there, the program ends (ur_rtde's moveL returns False), and ur://
+    names where the arm stopped (the twin's moveL once reported done there)."""
+    from ftcomp.errors import HardwareError
+    from ftcomp.hardware.registry import open_robot
+
+    turn = matrix_from_rotvec([0.0, 0.0, math.radians(170.0)])
+    with running_twin("test_moveL_held", seconds=60.0) as twin, open_robot(twin.robot_uri) as robot:
+        here = robot.pose()
+        R = here.R_base_tcp @ turn
+        robot.move_pose(here.p_base_tcp, R, 1.0)
+        robot.move_pose(here.p_base_tcp, R @ turn, 1.0)
+        # From -107.2 deg, 510 deg in all: the third stops at 360 deg, 42.8 deg short.
+        with pytest.raises(
+            HardwareError, match=r"moveL did not complete: the arm stopped 0\.0 mm and 42\.\d deg"
+        ):
+            robot.move_pose(here.p_base_tcp, R @ turn @ turn, 1.0)
+        held = robot.pose()
+        time.sleep(0.2)
+        assert np.linalg.norm(robot.pose().p_base_tcp - held.p_base_tcp) < 1e-4

@@ -308,16 +308,20 @@ class URRobot(LatenessOfPacer):
         ok = self._control().moveL(_pose_list(p, R), speed, self.max_accel_m_s2, False)
         self._moving = False
         self.check()
-        if not ok:
-            raise HardwareError(f"{self.uri.text!r}: moveL did not complete")
         at = self.pose()
         off_m = float(np.linalg.norm(at.p_base_tcp - p))
         off_rad = float(Rotation.from_matrix(R @ at.R_base_tcp.T).magnitude())
+        away = f"{off_m * 1e3:.1f} mm and {math.degrees(off_rad):.1f} deg from its target"
+        if not ok:
+            raise HardwareError(
+                f"{self.uri.text!r}: moveL did not complete: the arm stopped {away} (the "
+                "program ended: a joint limit or a singularity on the way, or the pendant; "
+                "the controller's log says which)"
+            )
         if off_m > _ARRIVED_M or off_rad > _ARRIVED_RAD:
             raise HardwareError(
-                f"{self.uri.text!r}: moveL ended {off_m * 1e3:.1f} mm and "
-                f"{math.degrees(off_rad):.1f} deg from its target (a joint limit or a "
-                "singularity on the way?)"
+                f"{self.uri.text!r}: moveL ended {away} (a joint limit or a singularity on "
+                "the way?)"
             )
 
     def settle(self, max_duration_s: float) -> float:

@@ -184,6 +184,12 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         """Commanded joint positions [rad], shape (6,)."""
         return self._q_cmd.copy()
 
+    @property
+    def joint_range_rad(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The joints' ranges ``(lower, upper)`` [rad], each shape (6,): the commanded joints
+        stop there."""
+        return self._lower.copy(), self._upper.copy()
+
     # ----------------------------------------------------------------- Robot protocol
     #: Every stamp is simulation time; the pose is the simulated sensor frame's.
     clock_name: ClockName = "simulation"

@@ -12,7 +12,9 @@ program's main loop, every controller cycle:
 - command 0 means idle: ready (1);
 - any other command runs once (the program blocks in it: ``moveL`` 3 until the arm arrived,
   the stops 15, 16, 33, 34 until it stands), then the program writes done
-  (``output_int_register_0 = 2``) and waits for the client to clear the command to 0;
+  (``output_int_register_0 = 2``) and waits for the client to clear the command to 0; a
+  ``moveL`` the arm cannot complete (a joint held at its limit) ends the program instead, as
+  a UR controller does, and ur_rtde's ``moveL`` returns False;
 - answers go to ``output_int_register_1`` (yes/no of 36, 60, 61) and
   ``output_double_register_0..5`` (joint positions of 30); 255 ends the program.
 
@@ -43,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
+from ftcomp.sim.arm import ARM_JOINT_NAMES
 from ftcomp.sim.cell import SimCell
 from ftcomp.sim.scene import NAMES
 
@@ -65,10 +68,14 @@ _MAX_CORRECTION_RAD_S: Final = 0.2
 #: Speed limits of servoL's approach to its target [m/s, rad/s].
 _SERVO_MAX_M_S: Final = 1.0
 _SERVO_MAX_RAD_S: Final = math.pi
-#: moveL is done once the arm is this close to the target [m, rad], or after this long [s].
+#: moveL is done once the arm is this close to the target [m, rad], or after this long [s]
+#: if it is within the second pair; further from it then, a joint held the arm (at its limit)
+#: and the program stops.
 _ARRIVED_M: Final = 5e-5
 _ARRIVED_RAD: Final = 2e-4
 _ARRIVE_TIMEOUT_S: Final = 0.5
+_HELD_M: Final = 1e-3
+_HELD_RAD: Final = math.radians(0.5)
 _REALTIME: Final = frozenset({6, 9, 10, 11, 24, 25, 26, 27, 38, 58, 66, 67, 68, 69, 70, 71})
 _STOP_COMMANDS: Final = frozenset({15, 16, 33, 34})
 _IDLE, _READY, _DONE = 0, 1, 2
@@ -325,16 +332,37 @@ class UrController:
         self.R_ref = matrix_from_rotvec(s * m.w) @ m.R0
         self.v_ref = np.concatenate([ds * m.dp, ds * m.w])
 
-    def _arrived(self, m: _Move) -> bool:
+    def _arrival(self, m: _Move) -> str:
+        """``"moving"``, ``"arrived"``, or ``"held"``: the profile ended
+        :data:`_ARRIVE_TIMEOUT_S` ago and the arm is still further than ``_HELD_M`` or
+        ``_HELD_RAD`` from its target."""
         if m.t < m.total:
-            return False
+            return "moving"
         m.arrived_t += self.dt
         p, R = self.cell.sensor_pose()
-        close = (
-            float(np.linalg.norm(p - self.p_ref)) < _ARRIVED_M
-            and float(np.linalg.norm(_skew_free_error(self.R_ref, R))) < _ARRIVED_RAD
+        off_m = float(np.linalg.norm(p - self.p_ref))
+        off_rad = float(np.linalg.norm(_skew_free_error(self.R_ref, R)))
+        if off_m < _ARRIVED_M and off_rad < _ARRIVED_RAD:
+            return "arrived"
+        if m.arrived_t < _ARRIVE_TIMEOUT_S:
+            return "moving"
+        if off_m < _HELD_M and off_rad < _HELD_RAD:
+            return "arrived"
+        q = self.cell.q_command_rad
+        lower, upper = self.cell.joint_range_rad
+        at_limit = np.flatnonzero((q <= lower + 1e-6) | (q >= upper - 1e-6))
+        why = (
+            f"joint {ARM_JOINT_NAMES[int(at_limit[0])]} at its limit"
+            if at_limit.size
+            else "the arm could not follow"
         )
-        return close or m.arrived_t >= _ARRIVE_TIMEOUT_S
+        print(
+            f"twin: moveL ended {off_m * 1e3:.1f} mm and {math.degrees(off_rad):.1f} deg from "
+            f"its target ({why}): the program stops, as a UR controller's does on a move it "
+            "cannot complete",
+            file=sys.stderr,
+        )
+        return "held"
 
     # ---------------------------------------------------------------- the cycle
     def _program_cycle(self) -> None:
@@ -357,9 +385,15 @@ class UrController:
         dt = self.dt
         if self.mode == "move" and self.move is not None:
             self._move_ref(self.move)
-            if self.blocking == "move" and self._arrived(self.move):
-                self.blocking = None
-                self._out_int(0, _DONE)
+            if self.blocking == "move":
+                arrival = self._arrival(self.move)
+                if arrival == "arrived":
+                    self.blocking = None
+                    self._out_int(0, _DONE)
+                elif arrival == "held":  # the program ends and the arm holds where it is
+                    self.script_running = False
+                    self.blocking = None
+                    self._enter_hold()
             return
         if self.mode == "speed":
             dv = self.speed_target - self.v_ref
