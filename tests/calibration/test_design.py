@@ -49,6 +49,22 @@ def test_candidates_respect_the_max_tilt() -> None:
     )
 
 
+def test_spins_stay_within_their_band_about_the_tilted_axis() -> None:
+    # Each candidate is tilt * flip * spin: undoing the tilt and the flip leaves the spin.
+    directions, spins = 30, 7
+    banded = candidate_orientations(60.0, directions=directions, spins=spins, max_spin_deg=90.0)
+    full = candidate_orientations(60.0, directions=directions, spins=spins)
+    straight = full[::spins]  # spin 0 of each axis: the shortest tilt from down, flipped
+    spin = np.repeat(straight, spins, axis=0).transpose(0, 2, 1) @ banded
+    angle = np.degrees(np.arctan2(spin[:, 1, 0], spin[:, 0, 0]))
+    np.testing.assert_allclose(spin[:, 2, 2], 1.0, atol=1e-12)  # a turn about z alone
+    np.testing.assert_allclose(
+        angle, np.tile(np.linspace(-90, 90, spins), len(straight)), atol=1e-9
+    )
+    with pytest.raises(ParameterError, match="--max-spin-deg must be in"):
+        candidate_orientations(60.0, max_spin_deg=0.0)
+
+
 def test_designed_poses_beat_the_papers_poses_in_every_predicted_error() -> None:
     designed = design_poses(9, candidate_orientations(90.0, directions=150, spins=8), THETA)
     ours = predicted_std_errors(designed, THETA)

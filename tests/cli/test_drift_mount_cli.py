@@ -7,6 +7,7 @@ import csv
 import json
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from calibration.drift_data import readings, tilted_poses, truth
@@ -158,6 +159,17 @@ def test_poses_design_count_below_the_minimum_is_one_line_exit_2(tmp_path, capsy
     assert main(["poses", "design", "--count", "2", "-o", str(tmp_path / "p.csv")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "at least 3 poses" in err
+
+
+@pytest.mark.parametrize("value", ["0", "181", "nan"])
+def test_poses_design_spin_band_outside_a_half_circle_is_one_line_exit_2(
+    tmp_path, capsys, value: str
+) -> None:
+    out = tmp_path / "p.csv"
+    assert main(["poses", "design", "--count", "6", "-o", str(out), "--max-spin-deg", value]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "--max-spin-deg" in err and "(0, 180]" in err
+    assert not out.exists()
 
 
 def test_a_live_stream_says_that_it_does_not_apply_the_drift(tmp_path, capsys) -> None:

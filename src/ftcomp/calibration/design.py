@@ -15,6 +15,13 @@ the total rotation short (nearest neighbour from the first pose, then 2-opt).
 Approximations: the information is evaluated at a nominal tool (the paper's by default), so
 a very different tool gets a design that is good but not optimal for it; the candidate grid is
 finite (``directions`` x ``spins``), and the exchange finds a local optimum.
+
+``poses design`` keeps the spins about the sensor's axis within a half turn (``--max-spin-deg
+90``): a full turn of spins wound the UR5e twin's wrist 3 to its 360 deg limit along
+``record``'s moveLs at tilts beyond 35 deg; within the band, designs tilted up to 70 deg run
+through (``tests/twin/test_design_on_ur5e.py``; at 80 deg one pose lies 18 deg from the wrist's
+singularity and the arm does not settle on it), and the predicted standard errors grow by at
+most 3 %.
 """
 
 from __future__ import annotations
@@ -68,16 +75,37 @@ def tilt_from_down_rad(R_base_sensor: NDArray[np.float64]) -> NDArray[np.float64
 
 
 def candidate_orientations(
-    max_tilt_deg: float = 180.0, *, directions: int = 400, spins: int = 12
+    max_tilt_deg: float = 180.0,
+    *,
+    directions: int = 400,
+    spins: int = 12,
+    max_spin_deg: float = 180.0,
 ) -> NDArray[np.float64]:
     """A grid of orientations: sensor z axes spread evenly (Fibonacci sphere) within
     ``max_tilt_deg`` of straight down, each with ``spins`` rotations about that axis.
+
+    Args:
+        max_tilt_deg: largest angle of the sensor's z axis from straight down [deg].
+        directions: z axes on the whole sphere (those within the tilt are kept).
+        spins: rotations about each axis.
+        max_spin_deg: the spins lie within +-this of the orientation the shortest tilt from
+            straight down gives [deg]: 180 (the default), a full turn evenly; below, evenly
+            from -max_spin_deg to +max_spin_deg. A band of half a turn (90) costs the
+            design little (gravity's direction in the sensor frame depends on the tilt's
+            azimuth less the spin) and keeps an arm's last wrist joint from winding to its
+            limit over a sequence of linear moves (``poses design``'s default).
 
     Returns:
         ``R_base_sensor``, shape (M, 3, 3).
     """
     if not 0.0 < max_tilt_deg <= 180.0:
         raise ParameterError(f"--max-tilt-deg must be in (0, 180], got {max_tilt_deg:g}")
+    if not 0.0 < max_spin_deg <= 180.0:
+        raise ParameterError(f"--max-spin-deg must be in (0, 180], got {max_spin_deg:g}")
+    if max_spin_deg >= 180.0 or spins == 1:
+        spin_deg = 360.0 * np.arange(spins) / spins
+    else:
+        spin_deg = np.linspace(-max_spin_deg, max_spin_deg, spins)
     k = np.arange(directions) + 0.5
     z = 1.0 - 2.0 * k / directions  # cos of the angle from base +z
     r = np.sqrt(1.0 - z * z)
@@ -105,8 +133,8 @@ def candidate_orientations(
             if c > 0
             else Rotation.from_euler("y", 180, degrees=True)
         )
-        for j in range(spins):
-            spin = Rotation.from_euler("z", 360.0 * j / spins, degrees=True)
+        for angle in spin_deg:
+            spin = Rotation.from_euler("z", angle, degrees=True)
             rotations.append((tilt * flip * spin).as_matrix())
     return np.asarray(rotations)
 

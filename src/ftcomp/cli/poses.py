@@ -106,6 +106,15 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="largest angle of the sensor's z axis from straight down [deg] (default: 180, any)",
     )
     design.add_argument(
+        "--max-spin-deg",
+        type=float,
+        default=90.0,
+        metavar="D",
+        help="largest turn of the sensor about its own axis from the orientation tilting it "
+        "straight from down gives [deg] (default: 90, a half-turn band: a robot's last wrist "
+        "joint then does not wind to its limit along the moves from pose to pose; 180: any)",
+    )
+    design.add_argument(
         "--keep",
         metavar="FILE.csv",
         help="poses already recorded (a pose or sample file): the design extends them",
@@ -200,6 +209,8 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--count {args.count}: must be at least 1")
     if not math.isfinite(args.max_tilt_deg) or not 0.0 < args.max_tilt_deg <= 180.0:
         raise ParameterError(f"--max-tilt-deg {args.max_tilt_deg:g}: must be in (0, 180]")
+    if not math.isfinite(args.max_spin_deg) or not 0.0 < args.max_spin_deg <= 180.0:
+        raise ParameterError(f"--max-spin-deg {args.max_spin_deg:g}: must be in (0, 180]")
     for flag in ("base_link", "tip_link"):
         if getattr(args, flag) is not None and args.urdf is None:
             raise ParameterError(f"--{flag.replace('_', '-')} needs --urdf")
@@ -230,7 +241,7 @@ def _design(
 
     R_keep = kept.rotations.as_matrix().reshape(-1, 3, 3) if kept is not None else None
     theta = nominal_theta()
-    candidates = candidate_orientations(args.max_tilt_deg)
+    candidates = candidate_orientations(args.max_tilt_deg, max_spin_deg=args.max_spin_deg)
     reach = reach_described[0] if reach_described is not None else None
     if reach is None:
         designed = design_poses(args.count, candidates, theta, keep=R_keep)
