@@ -45,6 +45,16 @@ and give the pure simulator's figure with the same drift, orientations and times
 
 ``--sim-recordings SEEDS``: ``--recording``'s figure (the median over one recording's splits)
 on SEEDS simulated recordings at the twin's pace, to set one twin recording's figure beside.
+
+``--twin-recordings N [--first-seed S] [--folder DIR] [--design-tilt-deg D]``: make N twin
+recordings the way docs/calibration.md does by hand (``ftcomp twin --realistic-drift 1 --seed
+S`` in its own process on two loopback addresses, ``ftcomp record`` through ``ur-rtde`` and
+``pynetft`` of 30 poses designed on the twin's UR5e within D deg of tilt, 60 by default; about
+80 s each; a recording or design already in DIR is reused), then give each one's
+figure, the figure of an estimator told the twin's true drift (what the noise of that recording
+leaves), and over the recordings the median with a bootstrap 90 % interval and the share within
+1.2x. One recording's figure moves by +-0.1 with its noise alone: the goal is judged on the
+median over many.
 """
 
 from __future__ import annotations
@@ -260,17 +270,141 @@ def recording_table(path: Path, splits: int, twin_seed: int | None = None) -> No
         twin_truth_table(samples, twin_seed, TWIN_TILT_DEG)
 
 
-def spanning_median(samples: Samples, splits: int) -> float:
-    """The median over ``splits`` spanning splits (9 poses to calibrate) of the stochastic
-    model's held-out force error, in units of the scatter floor: ``--recording``'s figure."""
+def spanning_median(
+    samples: Samples, splits: int, model: str = "stochastic", floor: float | None = None
+) -> float:
+    """The median over ``splits`` spanning splits (9 poses to calibrate) of ``model``'s
+    held-out force error, in units of the scatter floor (default: ``samples``' own):
+    ``--recording``'s figure."""
     from calibration.sim_drift_data import spanning_split
 
     rng = np.random.default_rng(0)
     P = len(np.unique(samples.pose))  # type: ignore[arg-type]
-    floor = scatter_floor(samples)
+    floor = scatter_floor(samples) if floor is None else floor
     pairs = [spanning_split(rng, P, 9) for _ in range(splits)]
-    return float(
-        np.median([held_out_rms(samples, tr, te, "stochastic")[0] / floor for tr, te in pairs])
+    return float(np.median([held_out_rms(samples, tr, te, model)[0] / floor for tr, te in pairs]))
+
+
+def record_on_twin(seed: int, poses: Path, out: Path) -> None:
+    """One recording as docs/calibration.md makes it: ``ftcomp twin --realistic-drift 1 --seed
+    SEED`` in its own process on two loopback addresses of its own, ``ftcomp record`` of
+    ``poses`` through ``ur-rtde`` and ``pynetft``, 600 readings a pose."""
+    import subprocess
+
+    from standins.twin_process import running_twin
+
+    tilt = ",".join(str(v) for v in TWIN_TILT_DEG)
+    args = ("--realistic-drift", "1", "--seed", str(seed), f"--tilt-deg={tilt}")
+    with running_twin(f"bench-accuracy-{seed}", *args, seconds=600.0) as twin:
+        subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "ftcomp",
+                "record",
+                "--robot",
+                f"{twin.robot_uri}?max_speed_mm_s=250&max_accel_mm_s2=1500",
+                "--sensor",
+                twin.sensor_uri,
+                "--poses",
+                str(poses),
+                "--samples-per-pose",
+                "600",
+                "--move-s",
+                "1.5",
+                "-o",
+                str(out),
+            ],
+            check=True,
+            stdout=subprocess.DEVNULL,
+        )
+
+
+def twin_recordings_table(
+    count: int, first_seed: int, folder: Path, splits: int, max_tilt_deg: float
+) -> None:
+    """``count`` twin recordings (made in ``folder``, or reused from it) of 30 poses designed
+    within ``max_tilt_deg`` of straight down, each one's figure beside an estimator told the
+    twin's true drift, and the median over the recordings with a bootstrap interval."""
+    import subprocess
+
+    from standins.twin_process import running_twin
+
+    folder.mkdir(parents=True, exist_ok=True)
+    poses = folder / "poses.csv"
+    if not poses.exists():  # designed on the twin's own UR5e: its IK within its joint limits
+        with running_twin("bench-accuracy-design", seconds=120.0) as twin:
+            design = f"--count 30 --position-mm 450 0 420 --max-tilt-deg {max_tilt_deg:g}"
+            subprocess.run(
+                [
+                    *(sys.executable, "-m", "ftcomp", "poses", "design", *design.split()),
+                    *("--robot", twin.robot_uri, "-o", str(poses)),
+                ],
+                check=True,
+                stdout=subprocess.DEVNULL,
+            )
+    from ftcomp.io.samples_csv import read_samples
+
+    figures, told = [], []
+    print(
+        f"twin recordings (30 poses of {poses}, 600 readings each), stochastic, 9 spanning "
+        f"poses, median over {splits} splits each; 'told': a constant-bias fit of the readings "
+        "with the twin's true drift subtracted (what the recording's noise alone leaves)"
+    )
+    for seed in range(first_seed, first_seed + count):
+        path = folder / f"twin-seed{seed}.csv"
+        if not path.exists():
+            record_on_twin(seed, poses, path)
+        samples = in_recording_order(read_samples(path))
+        floor = scatter_floor(samples)
+        truth = TwinTruth(samples, seed, TWIN_TILT_DEG)
+        assert samples.t is not None
+        known = replace(samples, wrench_sensor=samples.wrench_sensor - truth.drift(samples.t))
+        figures.append(spanning_median(samples, splits, floor=floor))
+        told.append(spanning_median(known, splits, "none", floor))
+        print(f"  seed {seed:3d}: {figures[-1]:.2f}   told {told[-1]:.2f}")
+        sys.stdout.flush()
+    v, w = np.array(figures), np.array(told)
+    rng = np.random.default_rng(0)
+    boot = np.median(rng.choice(v, (10_000, len(v))), axis=1)
+    low, high = np.percentile(boot, [5, 95])
+    print(
+        f"over {len(v)} recordings: median {np.median(v):.2f} (bootstrap 90 %: {low:.2f}-"
+        f"{high:.2f}), {np.mean(v <= 1.2):.0%} within 1.2x; told: median {np.median(w):.2f}; "
+        f"the estimator's own share, figure / told: median {np.median(v / w):.3f}"
+    )
+    simulated_at_design(truth.model, truth.R, count, splits)
+
+
+def simulated_at_design(model, R: np.ndarray, seeds: int, splits: int) -> None:
+    """The same figures on the pure simulator: this tool, these orientations, the realistic
+    drift from the sensor's switch-on, a pose every :data:`TWIN_POSE_PERIOD_S`, one recording
+    per seed (what the twin's figures are to be set beside)."""
+    from calibration.drift_data import readings
+    from calibration.sim_drift_data import PER_POSE, RealisticDrift
+
+    figures, told = [], []
+    for seed in range(seeds):
+        drift = RealisticDrift(seed)
+        samples = readings(
+            np.random.default_rng(seed),
+            model,
+            R,
+            PER_POSE,
+            t0_s=4.0,
+            pose_period_s=TWIN_POSE_PERIOD_S,
+            rate_hz=1200.0,
+            drift=drift,
+        )
+        floor = scatter_floor(samples)
+        assert samples.t is not None
+        known = replace(samples, wrench_sensor=samples.wrench_sensor - drift(samples.t))
+        figures.append(spanning_median(samples, splits, floor=floor))
+        told.append(spanning_median(known, splits, "none", floor))
+    print(
+        f"the simulator with this tool and these orientations, {seeds} recordings: median "
+        f"{np.median(figures):.2f}, {np.mean(np.array(figures) <= 1.2):.0%} within 1.2x; "
+        f"told: median {np.median(told):.2f}"
     )
 
 
@@ -288,41 +422,66 @@ def sim_recordings_table(seeds: int, splits: int) -> None:
     )
 
 
-def twin_truth_table(samples: Samples, seed: int, tilt_deg: tuple[float, float]) -> None:
-    """A twin recording against the twin's own truth, rebuilt in process (the tool, the tilt,
-    and the sensor's drift: a function of the seed and the sensor's clock alone, the clock's
-    offset to the recording's fitted); then the 9-pose figure of the pure simulator with that
-    drift, those orientations and those times, for four draws of the noise (how far the noise
-    alone moves one recording's figure)."""
-    from scipy.optimize import minimize_scalar
+class TwinTruth:
+    """A twin recording's truth, rebuilt in process from the twin's seed: the tool and the tilt
+    (``model``), and the sensor's drift, a function of the seed and the sensor's clock alone,
+    on the recording's clock (the offset between the two clocks fitted to the pose means)."""
 
+    def __init__(self, samples: Samples, seed: int, tilt_deg: tuple[float, float]) -> None:
+        from scipy.optimize import minimize_scalar
+
+        from ftcomp.twin.serve import TwinConfig
+
+        config = TwinConfig(
+            "127.0.0.1", "127.0.0.2", 1.0, realistic_drift=1.0, seed=seed, tilt_deg=tilt_deg
+        )
+        cell = config.open_cell()  # the cell alone: nothing is bound
+        self.model, self._sensor = cell.true_gravity_model(), cell.sensor
+        self.rate_hz = self._sensor.spec.output_rate_Hz
+        ids, R, wrench, _, var = pose_means(samples)
+        t = np.array([samples.t[samples.pose == i].mean() for i in ids])  # type: ignore[index]
+        order = np.argsort(t)
+        self.R, self.wrench, self.se, self.t = (
+            R[order],
+            wrench[order],
+            np.sqrt(var[order]),
+            t[order],
+        )
+        left = self.wrench - self.model.predict(self.R)
+
+        def misfit(offset: float) -> float:
+            return float(
+                np.sum(((left - self.sensor_drift(self.t - offset))[:, :3] / self.se[:, :3]) ** 2)
+            )
+
+        self.offset_s = float(
+            minimize_scalar(misfit, bounds=(self.t[0] - 600.0, self.t[0]), method="bounded").x
+        )
+        #: Each pose mean's error against the truth in its standard errors, (P, 6).
+        self.z = (left - self.drift(self.t)) / self.se
+
+    def sensor_drift(self, t_sensor_s: np.ndarray) -> np.ndarray:
+        """The drift [N, N*m] at times on the sensor's clock (from its switch-on), (n, 6)."""
+        ticks = np.rint(np.maximum(np.asarray(t_sensor_s, dtype=float), 0.0) * self.rate_hz)
+        ticks = ticks.astype(int)
+        first = int(ticks.min())
+        return self._sensor.drift(first, int(ticks.max()) - first + 1)[ticks - first]
+
+    def drift(self, t_s: np.ndarray) -> np.ndarray:
+        """The drift at times on the recording's clock, (n, 6)."""
+        return self.sensor_drift(np.asarray(t_s, dtype=float) - self.offset_s)
+
+
+def twin_truth_table(samples: Samples, seed: int, tilt_deg: tuple[float, float]) -> None:
+    """A twin recording against the twin's own truth (:class:`TwinTruth`); then the 9-pose
+    figure of the pure simulator with that drift, those orientations and those times, for four
+    draws of the noise (how far the noise alone moves one recording's figure)."""
     from calibration.drift_data import readings
     from calibration.sim_drift_data import PER_POSE
-    from ftcomp.twin.serve import TwinConfig
 
-    config = TwinConfig(
-        "127.0.0.1", "127.0.0.2", 1.0, realistic_drift=1.0, seed=seed, tilt_deg=tilt_deg
-    )
-    cell = config.open_cell()  # the cell alone: nothing is bound
-    model, sensor = cell.true_gravity_model(), cell.sensor
-    rate = sensor.spec.output_rate_Hz
-
-    def drift(t_s: np.ndarray) -> np.ndarray:
-        ticks = np.rint(np.maximum(np.asarray(t_s, dtype=float), 0.0) * rate).astype(int)
-        first = int(ticks.min())
-        return sensor.drift(first, int(ticks.max()) - first + 1)[ticks - first]
-
-    ids, R, wrench, _, var = pose_means(samples)
-    t = np.array([samples.t[samples.pose == i].mean() for i in ids])  # type: ignore[index]
-    order = np.argsort(t)
-    R, wrench, se, t = R[order], wrench[order], np.sqrt(var[order]), t[order]
-    left = wrench - model.predict(R)
-
-    def misfit(offset: float) -> float:
-        return float(np.sum(((left - drift(t - offset))[:, :3] / se[:, :3]) ** 2))
-
-    offset = minimize_scalar(misfit, bounds=(t[0] - 600.0, t[0]), method="bounded").x
-    z = (left - drift(t - offset)) / se
+    truth = TwinTruth(samples, seed, tilt_deg)
+    model, R, t, z, offset = truth.model, truth.R, truth.t, truth.z, truth.offset_s
+    drift, rate = truth.sensor_drift, truth.rate_hz
     print(
         f"  against the twin's truth (seed {seed}; the recording starts {t[0] - offset:.1f} s "
         f"after the sensor's switch-on): pose means' z RMS, force "
@@ -371,6 +530,25 @@ def main() -> None:
         help="the recording is from `ftcomp twin --realistic-drift 1 --seed S "
         "--tilt-deg=-0.204,-0.129`: compare it with the twin's truth",
     )
+    parser.add_argument(
+        "--twin-recordings",
+        type=int,
+        metavar="N",
+        help="make N twin recordings (about 80 s each) and give the figure over them",
+    )
+    parser.add_argument("--first-seed", type=int, default=0, help="--twin-recordings' first seed")
+    parser.add_argument(
+        "--design-tilt-deg",
+        type=float,
+        default=60.0,
+        help="--twin-recordings' design: its --max-tilt-deg (default 60)",
+    )
+    parser.add_argument(
+        "--folder",
+        type=Path,
+        default=Path("twin-recordings"),
+        help="--twin-recordings' folder (recordings in it are reused; default ./twin-recordings)",
+    )
     args = parser.parse_args()
     if args.recording is not None:
         recording_table(args.recording, args.splits, args.twin_seed)
@@ -380,6 +558,10 @@ def main() -> None:
         sim_table(args.seeds)
     if args.sim_recordings:
         sim_recordings_table(args.sim_recordings, args.splits)
+    if args.twin_recordings:
+        twin_recordings_table(
+            args.twin_recordings, args.first_seed, args.folder, args.splits, args.design_tilt_deg
+        )
 
 
 if __name__ == "__main__":
