@@ -107,7 +107,9 @@ class Ros2WrenchSensor:
         self._arrived = threading.Event()
         self._entities: list[Any] = []
 
-    def _on_data(self, reader: DataReader) -> None:
+    def _on_data(self, reader: DataReader | None) -> None:
+        if reader is None:  # Cyclone's callback for a reader deleted while it fired (on close)
+            return
         for msg in reader.take(N=256):
             if not isinstance(msg, WrenchStamped):
                 continue
