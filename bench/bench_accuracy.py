@@ -285,6 +285,17 @@ def spanning_median(
     return float(np.median([held_out_rms(samples, tr, te, model)[0] / floor for tr, te in pairs]))
 
 
+def figure_and_told(samples: Samples, drift, splits: int) -> tuple[float, float]:
+    """The stochastic model's spanning figure, and *told*'s: a constant-bias fit of the same
+    readings with the true ``drift(t)`` subtracted, both in units of ``samples``' floor."""
+    floor = scatter_floor(samples)
+    assert samples.t is not None
+    known = replace(samples, wrench_sensor=samples.wrench_sensor - drift(samples.t))
+    return spanning_median(samples, splits, floor=floor), spanning_median(
+        known, splits, "none", floor
+    )
+
+
 def record_on_twin(seed: int, poses: Path, out: Path) -> None:
     """One recording as docs/calibration.md makes it: ``ftcomp twin --realistic-drift 1 --seed
     SEED`` in its own process on two loopback addresses of its own, ``ftcomp record`` of
@@ -356,12 +367,10 @@ def twin_recordings_table(
         if not path.exists():
             record_on_twin(seed, poses, path)
         samples = in_recording_order(read_samples(path))
-        floor = scatter_floor(samples)
         truth = TwinTruth(samples, seed, TWIN_TILT_DEG)
-        assert samples.t is not None
-        known = replace(samples, wrench_sensor=samples.wrench_sensor - truth.drift(samples.t))
-        figures.append(spanning_median(samples, splits, floor=floor))
-        told.append(spanning_median(known, splits, "none", floor))
+        figure, known = figure_and_told(samples, truth.drift, splits)
+        figures.append(figure)
+        told.append(known)
         print(f"  seed {seed:3d}: {figures[-1]:.2f}   told {told[-1]:.2f}")
         sys.stdout.flush()
     v, w = np.array(figures), np.array(told)
@@ -396,11 +405,9 @@ def simulated_at_design(model, R: np.ndarray, seeds: int, splits: int) -> None:
             rate_hz=1200.0,
             drift=drift,
         )
-        floor = scatter_floor(samples)
-        assert samples.t is not None
-        known = replace(samples, wrench_sensor=samples.wrench_sensor - drift(samples.t))
-        figures.append(spanning_median(samples, splits, floor=floor))
-        told.append(spanning_median(known, splits, "none", floor))
+        figure, known = figure_and_told(samples, drift, splits)
+        figures.append(figure)
+        told.append(known)
     print(
         f"the simulator with this tool and these orientations, {seeds} recordings: median "
         f"{np.median(figures):.2f}, {np.mean(np.array(figures) <= 1.2):.0%} within 1.2x; "
@@ -441,13 +448,8 @@ class TwinTruth:
         ids, R, wrench, _, var = pose_means(samples)
         t = np.array([samples.t[samples.pose == i].mean() for i in ids])  # type: ignore[index]
         order = np.argsort(t)
-        self.R, self.wrench, self.se, self.t = (
-            R[order],
-            wrench[order],
-            np.sqrt(var[order]),
-            t[order],
-        )
-        left = self.wrench - self.model.predict(self.R)
+        self.R, self.se, self.t = R[order], np.sqrt(var[order]), t[order]
+        left = wrench[order] - self.model.predict(self.R)
 
         def misfit(offset: float) -> float:
             return float(
