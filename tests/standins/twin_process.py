@@ -18,18 +18,24 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from standins.launch import loopback_address
+from standins.launch import Drain, loopback_address
 
 __all__ = ["Twin", "running_twin"]
 
 
 @dataclass(frozen=True)
 class Twin:
-    """A running twin: its addresses and process."""
+    """A running twin: its addresses, process and output (read all along, the last lines kept:
+    :meth:`output` for a failing test's message, whole once the block has ended)."""
 
     robot_host: str
     sensor_host: str
     proc: subprocess.Popen[str]
+    drain: Drain
+
+    def output(self) -> str:
+        """The twin's last lines (its timing line at the end, late cycles on stderr)."""
+        return "ftcomp twin said:\n" + self.drain.text()
 
     @property
     def robot_uri(self) -> str:
@@ -63,6 +69,7 @@ def running_twin(
     proc = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ)
     )
+    drain = None
     try:
         assert proc.stdout is not None
         deadline = time.monotonic() + ready_timeout_s
@@ -76,7 +83,8 @@ def running_twin(
             proc.kill()
             _, err = proc.communicate(timeout=5)
             raise RuntimeError(f"ftcomp twin did not start: {line!r} {err[-2000:]}")
-        yield Twin(robot_host, sensor_host, proc)
+        drain = Drain(proc)
+        yield Twin(robot_host, sensor_host, proc, drain)
     finally:
         if proc.poll() is None:
             proc.terminate()
@@ -85,6 +93,8 @@ def running_twin(
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait(timeout=5)
+        if drain is not None:
+            drain.join()
         for stream in (proc.stdout, proc.stderr):
             if stream is not None:
                 stream.close()

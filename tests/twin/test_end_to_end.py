@@ -57,7 +57,7 @@ def calibrated(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
             "--samples-per-pose", "60", "--move-s", "0.5", "--position-mm", "450", "0", "420",
             "-o", str(samples),
         )  # fmt: skip
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 0, done.stderr + twin.output()
     done = _ftcomp("calibrate", str(samples), "-o", str(calibration))
     assert done.returncode == 0, done.stderr
     return calibration, truth
@@ -121,7 +121,7 @@ def test_run_sets_a_half_kilogram_load_down_gently(
             "--max-late-cycles", "50",  # a shared CI host: the client process is not real-time
             "-o", str(log),
         )  # fmt: skip
-    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.returncode == 0, done.stdout + done.stderr + twin.output()
     assert "settled" in done.stdout
     with contact.open() as f:
         rows = list(csv.DictReader(f))

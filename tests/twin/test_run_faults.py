@@ -33,6 +33,10 @@ ROBOT_STOPS = {
 SENSOR_STOPS = {
     "sensor-fault": "sensor fault serious_status",
     "rdt-loss": "stale_sample",
+    # The robot's stream goes silent too: the stale reading is seen first, and the stop and
+    # the disconnect, sent into a silent controller, must not wait on it (the subprocess's
+    # time-out is the hang's guard).
+    "network-loss": "stale_sample",
 }
 
 

@@ -30,6 +30,7 @@ _FAULTS = (
     "sensor-fault",
     "rdt-loss",
     "rtde-stop",
+    "network-loss",
     "protective-stop",
     "script-stop",
     "latency",

@@ -141,7 +141,7 @@ class URRobot(LatenessOfPacer):
         self._servo_target: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self._moving = False
         # The controller's stream went silent or the connection dropped: ur_rtde's blocking
-        # commands would wait on it (see _stop_without_stream).
+        # commands would wait on it (see stop).
         self._silent = False
 
     # ----------------------------------------------------------------- lifecycle
@@ -181,23 +181,42 @@ class URRobot(LatenessOfPacer):
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        """Stop motion, end the control script, disconnect."""
+        """Stop motion, end the control script, disconnect; with a silent controller (it may
+        go silent at any moment) each call is bounded in time (:data:`_EXIT_WAIT_S`)."""
         try:
             self.stop()
         finally:
+            if not self._silent and not self._stream_alive():
+                self._silent = True
             if self.control is not None:
                 control, self.control = self.control, None
                 if self._silent:  # stopScript would wait for the program's end in silent data
-                    _bounded(control.disconnect, _SILENT_WAIT_S, "ur-disconnect")
+                    _bounded(control.disconnect, "ur-disconnect")
                 else:
                     control.stopScript()
                     control.disconnect()
             if self.receive is not None:
                 receive, self.receive = self.receive, None
                 if self._silent:
-                    _bounded(receive.disconnect, _SILENT_WAIT_S, "ur-disconnect")
+                    _bounded(receive.disconnect, "ur-disconnect")
                 else:
                     receive.disconnect()
+
+    def _stream_alive(self) -> bool:
+        """Whether the controller's data still come: a new timestamp within a few periods.
+
+        ur_rtde's ``disconnect`` joins its receive thread, which, once the data have stopped,
+        reconnects without a time limit: a disconnect must know."""
+        r = self.receive
+        if r is None or not r.isConnected():
+            return False
+        deadline = time.monotonic() + _ALIVE_WAIT_PERIODS * self.control_period_s
+        last = r.getTimestamp()
+        while time.monotonic() < deadline:
+            time.sleep(self.control_period_s / 4)
+            if r.getTimestamp() != last:
+                return True
+        return False
 
     def connect_control(self) -> None:
         """Take control of the arm now (uploads ur_rtde's URScript, about a second), rather than
@@ -394,59 +413,66 @@ class URRobot(LatenessOfPacer):
         self.pacer.sleep()
 
     def stop(self) -> None:
-        """Decelerate to rest at once (speedStop, or servoStop in servo mode)."""
+        """Decelerate to rest at once (speedStop, or servoStop in servo mode); when that does
+        not return in time (the controller went silent), stop the program through the
+        dashboard server.
+
+        ur_rtde's ``speedStop``/``servoStop`` send the command, then poll the received state
+        for the script's *done* for up to 300 s (``UR_EXECUTION_TIMEOUT``), and its receive
+        thread, once the data stop, reconnects without a time limit (ur_rtde 1.6.5,
+        ``rtde_control_interface.cpp``). A controller can go silent at any moment (a cable
+        pulled: the sensor's stale reading may be what stopped the loop, 20 ms before the
+        robot's own stream is judged lost), so the stop command is always sent from a worker
+        thread and waited for at most :data:`_EXIT_WAIT_S` (it reaches a controller whose
+        output alone stalled); then the dashboard's ``stop`` (port 29999) ends the program,
+        which stops the arm.
+        """
         self._servo_target = None
         if self.control is None or not self._moving:
             return
         self._moving = False
         halt = self.control.speedStop if self.command == "speedl" else self.control.servoStop
-        if self._silent:
-            self._stop_without_stream(halt)
-        else:
-            halt(10.0)
+        if not _bounded(lambda: halt(10.0), "ur-stop") or self._silent:
+            self._silent = True
+            _bounded(self._dashboard_stop, "ur-dashboard-stop")
 
-    def _stop_without_stream(self, halt: Callable[[float], object]) -> None:
-        """Stop when the controller's stream is silent.
+    def _dashboard_stop(self) -> None:
+        """Stop the program through the dashboard server (port 29999)."""
+        import dashboard_client
 
-        ur_rtde's ``speedStop``/``servoStop`` send the command, then poll the (now silent)
-        received state for the script's *done* for up to 300 s (``UR_EXECUTION_TIMEOUT``), and
-        its receive thread reconnects without a time limit (ur_rtde 1.6.5,
-        ``rtde_control_interface.cpp``). So the stop command is sent from a worker thread (it
-        reaches a controller whose output alone stalled), and the program is stopped through
-        the dashboard server (port 29999, ``stop``), which stops the arm; each waited for at
-        most :data:`_SILENT_WAIT_S`.
-        """
-        _bounded(lambda: halt(10.0), _SILENT_WAIT_S, "ur-stop")
-
-        def dashboard_stop() -> None:
-            import dashboard_client
-
-            dashboard = dashboard_client.DashboardClient(self.host)
-            dashboard.connect(round(_SILENT_WAIT_S * 1000))
-            try:
-                dashboard.stop()
-            finally:
-                dashboard.disconnect()
-
-        _bounded(dashboard_stop, _SILENT_WAIT_S, "ur-dashboard-stop")
+        dashboard = dashboard_client.DashboardClient(self.host)
+        dashboard.connect(round(_EXIT_WAIT_S * 1000))
+        try:
+            dashboard.stop()
+        finally:
+            dashboard.disconnect()
 
 
-#: How long a stop waits for a blocking ur_rtde call once the controller's stream is silent [s].
-_SILENT_WAIT_S: Final = 0.5
+#: A controller that sends no new data within this many periods is silent (at exit).
+_ALIVE_WAIT_PERIODS: Final = 25
+
+#: How long a stop, the script's end or a disconnect may take before the controller is taken
+#: for silent [s]. A healthy controller answers each within a few periods (speedStop
+#: decelerates from 0.25 m/s at 10 m/s^2 in 25 ms).
+_EXIT_WAIT_S: Final = 0.5
 
 
-def _bounded(call: Callable[[], object], wait_s: float, name: str) -> None:
-    """Run ``call`` on a daemon thread and wait for it at most ``wait_s`` (ur_rtde releases
-    the interpreter's lock in its calls, so a call that hangs holds only its own thread).
-    What it raises is dropped: this is the last resort of a stop, on the way to an error."""
+def _bounded(call: Callable[[], object], name: str) -> bool:
+    """Run ``call`` on a daemon thread and wait for it at most :data:`_EXIT_WAIT_S` (ur_rtde
+    releases the interpreter's lock in its calls, so a call that hangs holds only its own
+    thread). Whether it returned in time without raising: what it raises is dropped, since
+    on the way to a stop the next resort follows (the dashboard's stop), not an error."""
+    returned = threading.Event()
 
     def run() -> None:
-        with contextlib.suppress(Exception):  # a failed last-resort stop: the error follows
+        with contextlib.suppress(Exception):
             call()
+            returned.set()
 
     worker = threading.Thread(target=run, name=name, daemon=True)
     worker.start()
-    worker.join(wait_s)
+    worker.join(_EXIT_WAIT_S)
+    return returned.is_set()
 
 
 def _option_positive(uri: Uri, name: str, value: float | None) -> float:

@@ -135,6 +135,7 @@ class NetFtServer:
         self.buffered = False
         self.batch: list[bytes] = []
         self.lose_next = 0
+        self.silent = False
         self.frozen: list[int] | None = None
         self.last: list[int] | None = None
         self.sent = 0
@@ -146,12 +147,14 @@ class NetFtServer:
 
     def inject(self, fault: str) -> None:
         """``sensor-frozen``: repeat the last reading from now on (status healthy);
-        ``rdt-loss``: lose the next 200 records on the way."""
+        ``rdt-loss``: lose the next 200 records on the way; ``network-loss``: lose them all."""
         with self.lock:
             if fault == "sensor-frozen":
                 self.frozen = self.last
             elif fault == "rdt-loss":
                 self.lose_next = 200
+            elif fault == "network-loss":
+                self.silent = True
 
     def _listen(self) -> None:
         for addr, command, count in rdt_requests(self.sock):
@@ -226,6 +229,8 @@ class NetFtServer:
                 status,
                 *(c - b for c, b in zip(values, self.bias, strict=True)),
             )
+            if self.silent:
+                return
             if self.lose_next > 0:
                 self.lose_next -= 1
                 return
@@ -385,7 +390,7 @@ class NetFtProcess:
             self.conn.send(("samples", ([list(c) for c in counts], status, time.monotonic())))
 
     def inject(self, fault: str) -> None:
-        """A sensor fault from now on: ``sensor-frozen`` or ``rdt-loss``."""
+        """A sensor fault from now on: ``sensor-frozen``, ``rdt-loss`` or ``network-loss``."""
         self.conn.send(("fault", fault))
 
     def close(self) -> None:

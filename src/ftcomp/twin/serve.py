@@ -91,6 +91,8 @@ FAULTS: Final = {
     "sensor-fault": "the Net F/T reports a serious status and goes on sending",
     "rdt-loss": "the next 200 RDT records are lost on the way",
     "rtde-stop": "the controller stops sending RTDE data (connections stay open)",
+    "network-loss": "the cell's network goes silent: no RTDE data, no RDT records (a cable "
+    "pulled between the host and the cell's switch; connections stay open)",
     "protective-stop": "a protective stop: the arm stops, the program ends",
     "script-stop": "the program is stopped from the pendant",
     "latency": "every RTDE package is sent 8-14 ms late (8 ms, up to 4 ms of jitter, in the "
@@ -427,11 +429,11 @@ class _Twin:
         if self.started_at is None or now - self.started_at < self.config.fault_at_s:
             return
         self.fault_fired = True
-        if fault in ("sensor-frozen", "rdt-loss"):
+        if fault in ("sensor-frozen", "rdt-loss", "network-loss"):
             self.netft.inject(fault)
-        elif fault == "rtde-stop":
+        if fault in ("rtde-stop", "network-loss"):
             self.rtde_silent = True
-        elif fault == "protective-stop":
+        if fault == "protective-stop":
             self.controller.protective_stop("protective stop on demand (--fault)")
         elif fault == "script-stop":
             self.controller.stop_program()
