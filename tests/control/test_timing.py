@@ -40,6 +40,27 @@ def test_a_late_cycle_is_counted_logged_with_its_lateness_and_restarts_the_sched
     assert "2 missed periods (1.96%)" in s.line() and "worst stretch 1 late in a row" in s.line()
 
 
+def test_late_cycles_are_logged_at_most_once_a_second_and_the_next_line_counts_the_rest(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    clock = _Clock()
+    timing = LoopTiming(0.002, name="test loop", clock_ns=clock)
+    for k in range(1000):  # every cycle 4 ms after the last: each one 2 ms late, 4 s in all
+        clock.now_ns = k * 4_000_000
+        timing.start()
+        timing.sent()
+    assert timing.summary().late_cycles == 999
+    # at 0.004 s (cycle 1), then 1 s later each time: cycles 251, 501 and 751
+    assert [r.getMessage() for r in caplog.records] == [
+        "test loop: cycle 1 started 2.0 ms late (periods missed: 1)",
+        *(
+            f"test loop: cycle {k} started 2.0 ms late (periods missed: 1); "
+            "249 more late cycles since the last line"
+            for k in (251, 501, 751)
+        ),
+    ]
+
+
 def test_a_simulated_loop_has_no_lateness_and_a_loop_without_stamps_no_age() -> None:
     clock = _Clock()
     timing = LoopTiming(0.001, paced=False, clock_ns=clock)

@@ -27,6 +27,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
+from typing import Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,6 +41,8 @@ _log = logging.getLogger(__name__)
 #: Histogram range [us]: 1 us bins up to 100 ms; longer values land in the last bin (their
 #: maximum is kept exactly).
 _BINS = 100_000
+#: A late cycle is logged at most this often [ns] (the summary counts them all).
+_LOG_EVERY_NS: Final = 1_000_000_000
 
 
 @dataclass(frozen=True)
@@ -193,9 +196,12 @@ class LoopTiming:
         self._max_compute_ns = 0
         self._max_age_ns = -1
         self._max_late_ns = 0
+        self._logged_at_ns: int | None = None
+        self._unlogged = 0
 
     def start(self) -> None:
-        """A cycle starts now: judge its lateness (a missed period is logged)."""
+        """A cycle starts now: judge its lateness (a missed period is logged, at most one line
+        a second: the next one counts those in between)."""
         self._start_cpu_ns = self._cpu_clock()
         now = self._clock()
         self._start_ns = now
@@ -223,13 +229,23 @@ class LoopTiming:
             self.late_in_a_row += 1
             if self.late_in_a_row > self.worst_late_in_a_row:
                 self.worst_late_in_a_row = self.late_in_a_row
-            _log.warning(
-                "%s: cycle %d started %.1f ms late (periods missed: %d)",
-                self.name,
-                self.cycles,
-                late * 1e-6,
-                missed,
-            )
+            # At most one line a second: the write is the loop's own (stderr, a pipe that may
+            # be read slowly or not at all, and then blocks), and a loaded host makes hundreds
+            # of late cycles a second (a twin logging each one filled its pipe and stopped).
+            if self._logged_at_ns is None or now - self._logged_at_ns >= _LOG_EVERY_NS:
+                _log.warning(
+                    "%s: cycle %d started %.1f ms late (periods missed: %d)%s",
+                    self.name,
+                    self.cycles,
+                    late * 1e-6,
+                    missed,
+                    f"; {self._unlogged} more late cycles since the last line"
+                    if self._unlogged
+                    else "",
+                )
+                self._logged_at_ns, self._unlogged = now, 0
+            else:
+                self._unlogged += 1
             self._due_ns = now + self._period_ns  # a new schedule from now, no burst
         else:
             self.late_in_a_row = 0
