@@ -99,6 +99,17 @@ def test_after_the_session_the_bias_is_held_and_its_uncertainty_grows() -> None:
     assert np.all(np.isfinite(result.loo_error))
 
 
+def test_without_leave_one_out_the_fit_is_the_same_and_no_refit_is_made() -> None:
+    _, samples, _ = session(5, 12, pose_period_s=10.0)
+    full = calibrate_extended(samples, bias_drift="stochastic")
+    lean = calibrate_extended(samples, bias_drift="stochastic", leave_one_out=False)
+    assert np.all(np.isnan(lean.loo_error)) and np.all(np.isfinite(full.loo_error))
+    np.testing.assert_allclose(lean.model.force_bias_N, full.model.force_bias_N, rtol=1e-12)
+    np.testing.assert_allclose(
+        lean.std_errors.center_of_gravity_m, full.std_errors.center_of_gravity_m, rtol=1e-12
+    )
+
+
 def test_polynomial_drift_holds_its_end_value_past_the_session() -> None:
     _, samples, _ = session(6, 12)
     drift = calibrate_extended(samples, bias_drift="quadratic", leave_one_out=False).bias_drift

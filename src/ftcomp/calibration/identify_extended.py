@@ -194,6 +194,7 @@ def _calibrate_stochastic(
             source=samples.source,
             drift=drift,
             sensor_map=with_map,
+            leave_one_out=leave_one_out,
         )
 
     fit, loo = run(False)
@@ -219,8 +220,6 @@ def _calibrate_stochastic(
         predicted = predicted + model.gravity_wrench(R)[:, :3] @ mapped.delta.T
     residuals = wrench - predicted
     warnings = [*base.warnings, *([mapped.verdict()] if mapped is not None else [])]
-    if not leave_one_out:
-        loo = np.full_like(wrench, np.nan)
     return replace(
         _refitted(base, model, std_errors, wrench, residuals, loo, warnings),
         bias_drift=fit.drift if drift else None,

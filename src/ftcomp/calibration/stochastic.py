@@ -193,6 +193,7 @@ def fit_stochastic(
     source: str = "the poses",
     drift: bool = True,
     sensor_map: bool = False,
+    leave_one_out: bool = True,
 ) -> tuple[StochasticFit, NDArray[np.float64]]:
     """Fit per-pose means with a Matérn 3/2 bias process and/or a general linear sensor map
     (:mod:`.sensor_map`); hyperparameters by REML.
@@ -208,6 +209,7 @@ def fit_stochastic(
         source: where the poses came from, for messages.
         drift: fit the bias process (False: a constant bias, the white scatter alone).
         sensor_map: fit the map ``delta`` too, under its prior.
+        leave_one_out: compute the leave-one-pose-out errors (P refits; NaN if not).
 
     Returns:
         The fit, and each pose's leave-one-pose-out error (P, 6) (hyperparameters held).
@@ -251,7 +253,7 @@ def fit_stochastic(
             if np.all(np.abs(delta) <= 1e-10 * np.maximum(np.abs(theta), 1.0)):
                 break
     fit = _result(problem, h, nll, t_range_s or (float(t_pose_s[0]), float(t_pose_s[-1])))
-    return fit, _leave_one_out(problem, h)
+    return fit, _leave_one_out(problem, h) if leave_one_out else np.full((P, 6), np.nan)
 
 
 def _leave_one_out(problem: _Problem, h: NDArray[np.float64]) -> NDArray[np.float64]:
