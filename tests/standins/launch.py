@@ -17,6 +17,7 @@ import zlib
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
+from typing import IO
 
 __all__ = ["Drain", "loopback_address", "running", "running_all"]
 
@@ -50,8 +51,8 @@ class Drain:
             thread.start()
 
     @staticmethod
-    def _read(stream: object, lines: collections.deque[str]) -> None:
-        for line in stream:  # type: ignore[attr-defined]
+    def _read(stream: IO[str], lines: collections.deque[str]) -> None:
+        for line in stream:
             lines.append(line)
 
     def join(self, timeout_s: float = 5.0) -> None:

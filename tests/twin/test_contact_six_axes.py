@@ -75,3 +75,35 @@ def test_a_sponge_that_shears_takes_the_springback_with_almost_no_lateral_force(
     assert sticking[2] == pytest.approx(WEIGHT_N, abs=0.1)
     # The pad shears with the arm's ~25 um springback: 600 N/m * 25 um = 0.015 N.
     assert np.linalg.norm(sticking[:2]) < 0.05
+
+
+def test_the_contact_wrench_is_the_sum_over_mujocos_contacts_one_by_one() -> None:
+    """The vectorised sum against MuJoCo's contacts taken one at a time (each contact's force
+    in its frame, rotated to the world, its moment about a point off the contacts)."""
+    import mujoco
+
+    cell = open_robot(parse_uri(PLACE))
+    assert isinstance(cell, SimCell)
+    cell.command_twist(np.array([0.0, 0.0, -0.002, 0.0, 0.0, 0.0]))
+    for _ in range(4000):
+        cell.wait_cycle()
+        if cell.true_contact_wrench_base(cell.sensor_pose()[0])[2] > WEIGHT_N:
+            break
+    m, d = cell.model, cell.data
+    load = m.geom("load_geom").id
+    surfaces = {m.geom(name).id for name in ("floor", "table", "sponge_top")}
+    point = np.array([0.3, -0.1, 0.5])
+    expected = np.zeros(6)
+    c6 = np.zeros(6)
+    for i in range(d.ncon):
+        c = d.contact[i]
+        pair = (int(c.geom1), int(c.geom2))
+        if load not in pair or ({*pair} - {load}).isdisjoint(surfaces):
+            continue
+        mujoco.mj_contactForce(m, d, i, c6)
+        on_load = 1.0 if pair[1] == load else -1.0  # the force acts on geom2
+        f = on_load * c.frame.reshape(3, 3).T @ c6[:3]
+        expected[:3] += f
+        expected[3:] += np.cross(c.pos - point, f) + on_load * c.frame.reshape(3, 3).T @ c6[3:]
+    assert d.ncon > 0 and expected[2] > WEIGHT_N
+    np.testing.assert_allclose(cell._contact_wrench_world(point), expected, rtol=1e-12, atol=1e-12)
