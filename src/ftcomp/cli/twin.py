@@ -22,19 +22,9 @@ from pathlib import Path
 
 from ftcomp.cli.live_status import view_address
 from ftcomp.errors import ParameterError
+from ftcomp.twin.faults import FAULTS
 
 __all__ = ["register", "run"]
-
-_FAULTS = (
-    "sensor-frozen",
-    "sensor-fault",
-    "rdt-loss",
-    "rtde-stop",
-    "network-loss",
-    "protective-stop",
-    "script-stop",
-    "latency",
-)
 
 
 def _floats(text: str, n: int, name: str) -> tuple[float, ...]:
@@ -93,7 +83,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         "--contact-log", metavar="FILE", help="write the contact log (CSV; default: not written)"
     )
     parser.add_argument(
-        "--fault", choices=_FAULTS, help="inject this fault on demand (default: none)"
+        "--fault", choices=tuple(FAULTS), help="inject this fault on demand (default: none)"
     )
     parser.add_argument(
         "--fault-at-s",

@@ -24,7 +24,7 @@ __all__ = [
 ]
 
 _WHERE = {
-    "FAULTS": "ftcomp.twin.serve",
+    "FAULTS": "ftcomp.twin.faults",
     "PROTECTIVE_STOP_FORCE_N": "ftcomp.twin.controller",
     "ROBOTS": "ftcomp.twin.serve",
     "SafetyState": "ftcomp.twin.controller",

@@ -55,6 +55,7 @@ from ftcomp.sim.sensor import SensorSpec, SimWrenchSensor
 from ftcomp.sim.surfaces import SURFACE_KINDS
 from ftcomp.sim.tool import LoadSpec
 from ftcomp.twin.controller import UrController
+from ftcomp.twin.faults import FAULTS
 from ftcomp.twin.netft import (
     COUNTS_PER_FORCE,
     COUNTS_PER_TORQUE,
@@ -74,7 +75,6 @@ from ftcomp.twin.rtde import RtdeSession
 
 __all__ = [
     "CONTACT_LOG_COLUMNS",
-    "FAULTS",
     "MAX_SENSOR_RATE_HZ",
     "ROBOTS",
     "TwinConfig",
@@ -85,19 +85,6 @@ __all__ = [
 
 #: Robots the twin answers as.
 ROBOTS: Final = ("ur5e",)
-#: Faults on demand: name -> what the twin does from the fault's time on.
-FAULTS: Final = {
-    "sensor-frozen": "the Net F/T repeats its last reading (status healthy)",
-    "sensor-fault": "the Net F/T reports a serious status and goes on sending",
-    "rdt-loss": "the next 200 RDT records are lost on the way",
-    "rtde-stop": "the controller stops sending RTDE data (connections stay open)",
-    "network-loss": "the cell's network goes silent: no RTDE data, no RDT records (a cable "
-    "pulled between the host and the cell's switch; connections stay open)",
-    "protective-stop": "a protective stop: the arm stops, the program ends",
-    "script-stop": "the program is stopped from the pendant",
-    "latency": "every RTDE package is sent 8-14 ms late (8 ms, up to 4 ms of jitter, in the "
-    "cell's 2 ms cycles)",
-}
 _CYCLE_S: Final = 0.002
 _VERSION: Final = (5, 11, 1, 108318)
 _RTDE_PORT: Final = 30004
