@@ -37,7 +37,7 @@ def test_sim_uri_builds_the_cell_it_describes_and_the_sensor_attaches_to_it() ->
         ("sim://?tilt_deg=1", "sim://", "option tilt_deg='1': expected 2 comma-separated"),
         ("sim://?load_kg=9", "sim://", "load_kg must be in (0, 4.0]"),
         ("sim://?surface=sand", "sim://", "expected one of none, sponge, book"),
-        ("sim://?grasp=1", "sim://", "grasp=1 needs a load"),
+        ("sim://?grasp=1", "sim://", "grasp needs a load"),
         ("sim://?seed=-1", "sim://", "seed must be >= 0"),
         ("warp://x", "sim://", "no robot backend warp://; valid: sim://"),
         ("sim:", "sim://", "not a backend URI"),

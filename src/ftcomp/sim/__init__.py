@@ -44,8 +44,9 @@ from ftcomp.extras import require_extra
 
 require_extra("sim", "the simulated cell (ftcomp sim, sim://)")
 
-from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmSpec, DHArmSpec, c4_like_arm, ur5e_arm
+from ftcomp.sim.arm import ARM_JOINT_NAMES, ARMS, ArmSpec, DHArmSpec, c4_like_arm, ur5e_arm
 from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, HOME_Q_RAD, SimCell
+from ftcomp.sim.cell_config import CellConfig
 from ftcomp.sim.collect import record_with_truth
 from ftcomp.sim.ik import DifferentialIK, dls_joint_velocity, solve_pose
 from ftcomp.sim.placement_cell import SimPlacementCell
@@ -55,6 +56,7 @@ from ftcomp.sim.surfaces import SURFACE_KINDS, BookSpec, SpongeSpec, SurfaceKind
 from ftcomp.sim.tool import LoadSpec, ToolSpec, paper_tool, table4_loads
 
 __all__ = [
+    "ARMS",
     "ARM_JOINT_NAMES",
     "COLLECTION_POSITION_BASE_M",
     "HOME_Q_RAD",
@@ -62,6 +64,7 @@ __all__ = [
     "SURFACE_KINDS",
     "ArmSpec",
     "BookSpec",
+    "CellConfig",
     "DHArmSpec",
     "DifferentialIK",
     "LoadSpec",

@@ -21,6 +21,7 @@ arm's gravity and Coriolis torques and of ``kv`` times the commanded joint veloc
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Final
 
@@ -31,6 +32,7 @@ from ftcomp.arrays import freeze_field
 from ftcomp.errors import ParameterError
 
 __all__ = [
+    "ARMS",
     "ARM_JOINT_NAMES",
     "C4_HOME_Q_RAD",
     "UR5E_HOME_Q_RAD",
@@ -300,3 +302,7 @@ def ur5e_arm() -> DHArmSpec:
         armature_kgm2=np.array([1.0, 1.0, 0.5, 0.1, 0.1, 0.05]),
         home_q_rad=np.array(UR5E_HOME_Q_RAD),
     )
+
+
+#: The arms a cell can be built with, by name (``sim://?arm=NAME``).
+ARMS: Final[Mapping[str, Callable[[], ArmModel]]] = {"c4": c4_like_arm, "ur5e": ur5e_arm}

@@ -1,8 +1,10 @@
 """The ``sim://`` backend: the MuJoCo cell as a robot and its wrist sensor.
 
-Robot URI options (all optional)::
+Robot URI options (all optional), each a field of :class:`~ftcomp.sim.cell_config.CellConfig`
+(where their ranges are)::
 
-    sim://?tilt_deg=U,V       base mounting tilt [deg] (default: the paper's -0.204,-0.129)
+    sim://?arm=c4|ur5e|fr3    the arm (:data:`ftcomp.sim.arm.ARMS`; default c4, the C4-like arm)
+          &tilt_deg=U,V       base mounting tilt [deg] (default: the paper's -0.204,-0.129)
           &gripper=1|0        the paper's gripper, or the bare sensing end (default 1)
           &load_kg=X          a load of X kg in the scene (parked on the floor)
           &grasp=1|0          start with the load in the gripper (default 0)
@@ -28,39 +30,31 @@ mount is the identity.
 
 from __future__ import annotations
 
-import math
-from dataclasses import replace
-
-import numpy as np
-
 from ftcomp import paper
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.hardware.registry import Uri
+from ftcomp.sim.arm import ARMS
 from ftcomp.sim.cell import SimCell
-from ftcomp.sim.scene import SceneConfig
+from ftcomp.sim.cell_config import MAX_LOAD_KG, CellConfig
 from ftcomp.sim.sensor import SensorSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS
-from ftcomp.sim.tool import LoadSpec
 
 __all__ = [
     "MAX_LOAD_KG",
     "as_sim_cell",
+    "cell_config_from_uri",
     "open_robot",
     "open_sensor",
-    "scene_from_uri",
     "sensor_spec_from_uri",
 ]
 
-#: Largest load the simulated arm takes [kg] (the C4-A901S is rated for 4 kg).
-MAX_LOAD_KG = 4.0
 
-
-def scene_from_uri(uri: Uri) -> tuple[SceneConfig, int, bool]:
-    """``(scene, seed, grasp)`` from a ``sim://`` robot URI's options.
+def cell_config_from_uri(uri: Uri) -> CellConfig:
+    """The :class:`CellConfig` a ``sim://`` robot URI's options describe.
 
     Raises:
-        ParameterError: an unknown or out-of-range option, naming the URI.
+        ParameterError: an unknown, malformed or out-of-range option, naming the URI.
     """
     options = uri.reader()
     tilt = options.floats("tilt_deg", paper.TILT_DEG)
@@ -69,101 +63,52 @@ def scene_from_uri(uri: Uri) -> tuple[SceneConfig, int, bool]:
     grasp = options.flag("grasp", False)
     surface = options.text("surface", "none", SURFACE_KINDS)
     seed = options.integer("seed", 0)
-    options.done()
-    for name, value in zip(("U", "V"), tilt, strict=True):
-        if abs(value) >= 30.0:
-            raise ParameterError(f"{uri.text!r}: tilt {name}={value} deg must be within +-30 deg")
-    if load_kg is not None and not 0.0 < load_kg <= MAX_LOAD_KG:
-        raise ParameterError(f"{uri.text!r}: load_kg must be in (0, {MAX_LOAD_KG}], got {load_kg}")
-    if load_kg is not None and not gripper:
-        raise ParameterError(f"{uri.text!r}: a load needs the gripper (drop gripper=0)")
-    if grasp and load_kg is None:
-        raise ParameterError(f"{uri.text!r}: grasp=1 needs a load (load_kg=X)")
-    if seed < 0:
-        raise ParameterError(f"{uri.text!r}: seed must be >= 0, got {seed}")
-    scene = SceneConfig(
-        tilt_U_rad=math.radians(tilt[0]),
-        tilt_V_rad=math.radians(tilt[1]),
-        gripper=gripper,
-        load=LoadSpec(load_kg) if load_kg is not None else None,
-        surface=surface,  # type: ignore[arg-type]
+    clearance_mm = options.number("clearance_mm", None)
+    arm = options.text("arm", "c4", tuple(ARMS))
+    text = uri.options.get("gain_error_percent")
+    gain: float | tuple[float, ...] = (
+        options.floats("gain_error_percent", (0.0,) * 6)
+        if text is not None and "," in text
+        else options.number("gain_error_percent", 0.0) or 0.0
     )
-    return scene, seed, grasp
-
-
-_SENSOR_OPTIONS = (
-    "gain_error_percent",
-    "drift_N_per_min",
-    "drift_Nm_per_min",
-    "drift_walk_N",
-    "realistic_drift",
-)
+    rate_f = options.floats("drift_N_per_min", (0.0, 0.0, 0.0))
+    rate_t = options.floats("drift_Nm_per_min", (0.0, 0.0, 0.0))
+    walk = options.number("drift_walk_N", 0.0) or 0.0
+    realistic = options.number("realistic_drift", 0.0) or 0.0
+    options.done()
+    try:
+        return CellConfig(
+            arm=ARMS[arm](),
+            tilt_deg=(tilt[0], tilt[1]),
+            gripper=gripper,
+            load_kg=load_kg,
+            grasp=grasp,
+            surface=surface,  # type: ignore[arg-type]
+            clearance_mm=clearance_mm,
+            seed=seed,
+            gain_error_percent=gain,
+            drift_N_per_min=(rate_f[0], rate_f[1], rate_f[2]),
+            drift_Nm_per_min=(rate_t[0], rate_t[1], rate_t[2]),
+            drift_walk_N=walk,
+            realistic_drift=realistic,
+        )
+    except ParameterError as error:
+        raise ParameterError(f"{uri.text!r}: {error}") from None
 
 
 def sensor_spec_from_uri(uri: Uri) -> SensorSpec:
-    """The sensor's realism options of a ``sim://`` URI (gain error, bias drift); only these
-    options are read (the rest are the scene's).
+    """The sensor model of a ``sim://`` URI (gain error, bias drift):
+    ``cell_config_from_uri(uri).sensor_spec()``.
 
     Raises:
         ParameterError: a malformed or out-of-range value, naming the URI.
     """
-    options = replace(uri, options={k: v for k, v in uri.options.items() if k in _SENSOR_OPTIONS})
-    reader = options.reader()
-    text = options.options.get("gain_error_percent")
-    gain = (
-        reader.floats("gain_error_percent", (0.0,) * 6)
-        if text is not None and "," in text
-        else (reader.number("gain_error_percent", 0.0) or 0.0,) * 6
-    )
-    rate_f = reader.floats("drift_N_per_min", (0.0, 0.0, 0.0))
-    rate_t = reader.floats("drift_Nm_per_min", (0.0, 0.0, 0.0))
-    walk = reader.number("drift_walk_N", 0.0) or 0.0
-    realistic = reader.number("realistic_drift", 0.0) or 0.0
-    reader.done()
-    if not (math.isfinite(realistic) and 0.0 <= realistic <= 100.0):
-        raise ParameterError(f"{uri.text!r}: realistic_drift must be in 0 .. 100, got {realistic}")
-    if any(abs(g) >= 50.0 for g in gain):
-        raise ParameterError(f"{uri.text!r}: gain_error_percent must be within +-50 %")
-    if walk < 0.0:
-        raise ParameterError(f"{uri.text!r}: drift_walk_N must be >= 0, got {walk}")
-    base = SensorSpec().realistic_drift(realistic) if realistic else SensorSpec()
-    walk_6 = np.repeat([walk, walk * base.torque_noise_std_Nm / base.force_noise_std_N], 3)
-    return replace(
-        base,
-        gain_error_fraction=np.array(gain) / 100.0,
-        bias_drift_rate_per_s=np.array([*rate_f, *rate_t]) / 60.0,
-        bias_walk_per_sqrt_s=walk_6 / math.sqrt(60.0),
-    )
+    return cell_config_from_uri(uri).sensor_spec()
 
 
 def open_robot(uri: Uri) -> Robot:
-    """A fresh simulated cell."""
-    clearance_mm = uri.options.get("clearance_mm")
-    spec = sensor_spec_from_uri(uri)
-    options = {
-        k: v for k, v in uri.options.items() if k != "clearance_mm" and k not in _SENSOR_OPTIONS
-    }
-    scene, seed, grasp = scene_from_uri(replace(uri, options=options))
-    cell = SimCell(scene, spec, seed=seed)
-    if clearance_mm is None:
-        if grasp:
-            cell.grasp()
-        return cell
-    try:
-        clearance_m = float(clearance_mm) * 1e-3
-    except ValueError:
-        clearance_m = math.nan
-    if not 0.0 <= clearance_m <= 0.1:
-        raise ParameterError(
-            f"{uri.text!r}: clearance_mm must be in [0, 100], got {clearance_mm!r}"
-        )
-    if not grasp or scene.surface == "none":
-        raise ParameterError(f"{uri.text!r}: clearance_mm needs grasp=1 and a surface")
-    # As the placement cell: grasp 20 mm up (empty on the way), then lower to the clearance.
-    cell.hold_above_surface(max(clearance_m, 0.02), 0.5)
-    cell.grasp()
-    cell.hold_above_surface(clearance_m, 0.3)
-    return cell
+    """A fresh simulated cell (:meth:`CellConfig.open_cell` of the URI's config)."""
+    return cell_config_from_uri(uri).open_cell()
 
 
 def as_sim_cell(robot: Robot | None, needs: str) -> SimCell:

@@ -33,7 +33,7 @@ from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmModel, ArmSpec, DHArmSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS, BookSpec, SpongeSpec, SurfaceKind, TableSpec
 from ftcomp.sim.tool import LoadSpec, ToolSpec
 
-__all__ = ["NAMES", "SceneConfig", "build_mjcf"]
+__all__ = ["MAX_TILT_DEG", "NAMES", "SceneConfig", "build_mjcf"]
 
 #: MJCF names the cell relies on.
 NAMES: Final = {
@@ -54,6 +54,8 @@ NAMES: Final = {
     "table": "table",
 }
 
+#: The base's mounting tilt must be below this about either axis [deg].
+MAX_TILT_DEG: Final = 30.0
 #: Mass [kg] and half-height [m] of the sensor's fixed housing (above the sensing end).
 _HOUSING_MASS_KG: Final = 0.25
 _HOUSING_HALF_HEIGHT_M: Final = 0.015
@@ -118,8 +120,10 @@ class SceneConfig:
             raise ParameterError("SceneConfig.rotvec_flange_sensor_rad must have norm <= pi")
         for name in ("tilt_U_rad", "tilt_V_rad"):
             value = getattr(self, name)
-            if not math.isfinite(value) or abs(value) >= math.radians(30.0):
-                raise ParameterError(f"SceneConfig.{name} must be within +-30 deg, got {value}")
+            if not math.isfinite(value) or abs(value) >= math.radians(MAX_TILT_DEG):
+                raise ParameterError(
+                    f"SceneConfig.{name} must be within +-{MAX_TILT_DEG:g} deg, got {value}"
+                )
         if self.surface not in SURFACE_KINDS:
             raise ParameterError(
                 f"unknown surface {self.surface!r}; valid: {', '.join(SURFACE_KINDS)}"
