@@ -28,8 +28,8 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Protocol, runtime_checkable
 
-from ftcomp.control.timing import TimingSummary
 from ftcomp.errors import ParameterError
+from ftcomp.hardware.pacing import TimingSummary
 from ftcomp.io.atomic import atomic_output, atomic_write_text
 from ftcomp.io.timestamps import format_time
 

@@ -32,11 +32,10 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.arrays import freeze_field
-from ftcomp.control.loop import ControlCycle, run_loop
-from ftcomp.control.timing import LoopTiming, TimingSummary
+from ftcomp.control.loop import ControlCycle, loop_clock, run_loop
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import OrientationEncoding, quat_from_matrix
-from ftcomp.hardware.pacing import on_host_clock
+from ftcomp.hardware.pacing import LoopClock, TimingSummary
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.samples_csv import write_samples
@@ -315,21 +314,17 @@ def record(
     start = time.monotonic()
     ended: Ending = "fault"
     reason = "the session failed before its first pose"  # unless _run_plan returns
-    timing = (
-        LoopTiming(robot.control_period_s, paced=on_host_clock(robot), name="ftcomp record")
-        if isinstance(plan, HandGuided)
-        else None
-    )
+    clock = loop_clock(robot, "ftcomp record") if isinstance(plan, HandGuided) else None
     with InterruptHold() as hold:
         try:
-            ended, reason = _run_plan(robot, sensor, plan, mount, driven, recorded, file, timing)
+            ended, reason = _run_plan(robot, sensor, plan, mount, driven, recorded, file, clock)
         finally:
             hold.finishing(f"finishing {output}")
             if thread is not None:
                 last_ns = int(file.records[-1].t_ns[-1]) if file.records else 0
                 thread.event(last_ns, "end" if ended == "complete" else "fault", reason or ended)
                 thread.close()
-        summary = timing.summary() if timing is not None and timing.cycles else None
+        summary = clock.summary() if clock is not None and clock.timing.cycles else None
         if summary is not None and file.records:
             save_timing(output, summary)
     return RecordResult(
@@ -352,7 +347,7 @@ def _run_plan(
     driven: Callable[[PoseRecord], None],
     recorded: Callable[[PoseEvent], None],
     file: _SampleFile,
-    timing: LoopTiming | None,
+    clock: LoopClock | None,
 ) -> tuple[Ending, str]:
     """Record the plan; how it ended and why (see :func:`record`), the robot stopped."""
     ended: Ending = "complete"
@@ -380,7 +375,7 @@ def _run_plan(
                 recorded,
                 samples_per_pose=plan.samples_per_pose,
             )
-            run_loop(ControlCycle(robot, sensor, mount=mount), recorder, timing=timing)
+            run_loop(ControlCycle(robot, sensor, mount=mount), recorder, clock=clock)
     except KeyboardInterrupt:
         ended, reason = "interrupted", "interrupted (Ctrl-C)"
     except FtcompError as exc:

@@ -39,12 +39,11 @@ from ftcomp.control.laws import (
     VelocityLaw,
     selection_matrix,
 )
-from ftcomp.control.loop import ControlCycle, run_loop
+from ftcomp.control.loop import ControlCycle, loop_clock, run_loop
 from ftcomp.control.safety import SafetyLimits
-from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import quat_from_matrix
-from ftcomp.hardware.pacing import on_host_clock
+from ftcomp.hardware.pacing import TimingSummary
 from ftcomp.hardware.protocols import Mount, Robot, TakesControl, WrenchSensor
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
@@ -234,7 +233,7 @@ class RunResult:
             ``settle.hold_s`` (0.3 s without a rule) [N], control frame, (3,) (NaN: no cycle).
         log: the log's path.
         load_events: the online load's grasp, release and contact events (empty without it).
-        timing: how the loop kept time (:class:`~ftcomp.control.timing.TimingSummary`; its
+        timing: how the loop kept time (:class:`~ftcomp.hardware.pacing.TimingSummary`; its
             block is saved beside the log, :func:`~ftcomp.session.log.timing_path`).
         observer_dropped_rows: log rows the observers (MCAP, view) did not get: their queue
             was full.
@@ -407,9 +406,9 @@ def run_compliant(
             dry_run=config.dry_run,
             max_late_cycles=config.max_late_cycles,
         )
-        timing = LoopTiming(period_s, paced=on_host_clock(robot), name="ftcomp run")
+        clock = loop_clock(robot, "ftcomp run")
         try:
-            run_loop(cycle, step, timing=timing, in_slack=(log_pending,))
+            run_loop(cycle, step, clock=clock, in_slack=(log_pending,))
             outcome = step.outcome
         except KeyboardInterrupt:
             outcome, message = "interrupted", "interrupted (Ctrl-C)"
@@ -420,14 +419,14 @@ def run_compliant(
             message = (
                 f"loop late: the loop fell {config.max_late_cycles} periods behind the robot's "
                 f"schedule "
-                f"(worst start {timing.summary().lateness_max_s * 1e3:.1f} ms late)"
+                f"(worst start {clock.summary().lateness_max_s * 1e3:.1f} ms late)"
             )
         elif not message and step.faulted:
             message = f"protective stop: {outcome}"
         log_pending()  # the last cycle's row, and one kept when the loop ended by an exception
         if observers:
             _tell_end(log, t0_ns[0] if t0_ns else 0, summary.t_ns, load, outcome, message)
-        loop_timing = timing.summary()
+        loop_timing = clock.summary()
         save_timing(log_path, loop_timing, log=log)
         dropped = log.dropped_rows
     duration_s, travel_m, final_error = summary.figures()

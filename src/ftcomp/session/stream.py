@@ -24,11 +24,10 @@ from numpy.typing import NDArray
 from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.bias_tracking import BiasTracker, BiasTrackingConfig
 from ftcomp.compensation.compensator import GravityCompensator
-from ftcomp.control.loop import ControlCycle, Reading, run_loop
-from ftcomp.control.timing import LoopTiming, TimingSummary
+from ftcomp.control.loop import ControlCycle, Reading, loop_clock, run_loop
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import quat_from_matrix
-from ftcomp.hardware.pacing import on_host_clock
+from ftcomp.hardware.pacing import TimingSummary
 from ftcomp.hardware.protocols import (
     CountsLostPackets,
     Mount,
@@ -349,9 +348,9 @@ def stream(
 
             sinks.append(progress)
         cycle = ControlCycle(robot, sensor, mount=mount)  # the logger compensates
-        timing = LoopTiming(cycle.period_s, paced=on_host_clock(robot), name="ftcomp stream")
+        clock = loop_clock(robot, "ftcomp stream")
         try:
-            run_loop(cycle, logger, sinks=sinks, timing=timing, in_slack=(log.flush,))
+            run_loop(cycle, logger, sinks=sinks, clock=clock, in_slack=(log.flush,))
         except EndOfReplayError:
             outcome = "end_of_replay"
         except KeyboardInterrupt:
@@ -367,7 +366,7 @@ def stream(
             log.event(round(event.confirmed_t_s * 1e9), event.kind, event.describe())
         end_ns = t0_ns + round(logger.elapsed_s * 1e9)
         log.event(end_ns, "fault" if message else "end", message or outcome)
-        loop_timing = timing.summary()
+        loop_timing = clock.summary()
         save_timing(log_path, loop_timing, log=log)
         dropped = log.dropped_rows
     health = sensor.stream_health() if isinstance(sensor, ReportsStreamHealth) else None
