@@ -15,6 +15,9 @@ from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
 from typing import TYPE_CHECKING
 
+from ftcomp.errors import ParameterError
+from ftcomp.hardware.devices import uri_help
+
 if TYPE_CHECKING:
     from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 
@@ -44,15 +47,18 @@ def add_hardware_arguments(parser: argparse.ArgumentParser, *, robot_required: b
         "--robot",
         required=robot_required,
         metavar="URI",
-        help="the arm: sim://?..., ur://HOST, fixed://?rpy_deg=..., replay://FILE"
+        help="the arm: "
+        + uri_help("robot")
         + ("" if robot_required else " (default: none, the sensor alone)"),
     )
     parser.add_argument(
         "--sensor",
         required=True,
         metavar="URI",
-        help="the F/T sensor: sim://, netft://HOST, ur://HOST (built-in), replay://FILE "
-        "(netft://HOST?bias=1 zeroes the tool's weight: refused with -c, use ftcomp rebias)",
+        help="the F/T sensor: "
+        + uri_help("sensor")
+        + " (a sensor that tares itself, netft://HOST?bias=1, zeroes the tool's weight: refused "
+        "with -c, use ftcomp rebias)",
     )
     parser.add_argument(
         "--mount",
@@ -79,14 +85,24 @@ def open_hardware(
 ) -> Iterator[tuple[Robot, WrenchSensor, Mount]]:
     """Open and enter the robot (then ``check_robot(robot)``), then the sensor; leave both
     (motion stopped first) at the end."""
-    from ftcomp.hardware.netft import check_bias_and_calibration
+    from ftcomp.hardware.protocols import TaresInHardware
     from ftcomp.hardware.registry import open_robot, open_sensor
 
-    check_bias_and_calibration(args.sensor, getattr(args, "calibration", None))
+    calibration = getattr(args, "calibration", None)
     mount = mount_of(args)
     with ExitStack() as stack:
         robot = stack.enter_context(open_robot(args.robot or NO_ROBOT))
         if check_robot is not None:
             check_robot(robot)
-        sensor = stack.enter_context(open_sensor(args.sensor, robot))
+        sensor = open_sensor(args.sensor, robot)
+        if calibration is not None and (
+            isinstance(sensor, TaresInHardware) and sensor.tares_in_hardware
+        ):
+            raise ParameterError(
+                f"{args.sensor!r} zeroes the sensor with the tool's weight in it and "
+                f"{calibration} would subtract that weight again; drop its bias=1 (the "
+                "calibration's bias is used), or re-bias the calibration at a still pose: "
+                "ftcomp rebias"
+            )
+        sensor = stack.enter_context(sensor)
         yield robot, sensor, mount

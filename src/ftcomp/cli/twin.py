@@ -1,14 +1,15 @@
-"""``ftcomp twin``: serve the simulated cell as a UR e-Series with a wrist Net F/T on loopback.
+"""``ftcomp twin``: serve the simulated cell as a robot with a wrist sensor on loopback.
 
-``ftcomp twin --robot-host 127.0.0.N --sensor-host 127.0.0.M [--seconds S] [--load-kg X
+``ftcomp twin --robot-host 127.0.0.N --sensor-host 127.0.0.M [--robot FACE] [--sensor FACE]
+[--seconds S] [--load-kg X
 --surface sponge|book|none --clearance-mm C] [--tilt-deg U,V] [--truth truth.json]
 [--contact-log contact.csv] [--fault NAME --fault-at-s T] [--tcp-offset-mm X,Y,Z
 --tcp-rotvec-rad RX,RY,RZ] [--sensor-rate-hz R] [--view HOST:PORT]``
 
-The robot answers RTDE (30004, 500 Hz), the dashboard (29999) and the script ports
-(30001-30003) on the robot host, as ``ur_rtde``'s ``RTDEControlInterface`` and
-``RTDEReceiveInterface`` need them; the Net F/T answers HTTP (netftapi2.xml) and RDT over UDP
-49152 on the sensor host. Nothing else is bound. Prints ``twin ready: ...`` once every socket
+Each device answers with its own protocol on its host (``--robot ur5e``, the default: RTDE
+30004 at 500 Hz, the dashboard 29999 and the script ports 30001-30003, as ``ur_rtde`` needs
+them; ``--sensor netft``, the default: HTTP netftapi2.xml and RDT over UDP 49152). Nothing else
+is bound. Prints ``twin ready: ...`` once every socket
 is bound, serves until ``--seconds`` pass or SIGTERM / Ctrl-C, then a line of what it served.
 ``--view HOST:PORT`` serves the contact wrench, the TCP pose and the safety state live to
 Foxglove or Lichtblick (docs/views.md).
@@ -22,7 +23,7 @@ from pathlib import Path
 
 from ftcomp.cli.live_status import view_address
 from ftcomp.errors import ParameterError
-from ftcomp.twin.faults import FAULTS
+from ftcomp.hardware.devices import devices, twin_faces
 
 __all__ = ["register", "run"]
 
@@ -42,11 +43,25 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.description = __doc__.split("\n\n", 1)[1].replace("``", "") if __doc__ else None
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
     parser.add_argument("--robot-host", required=True, help="loopback address of the robot")
-    parser.add_argument("--sensor-host", required=True, help="loopback address of the Net F/T")
+    parser.add_argument("--sensor-host", required=True, help="loopback address of the sensor")
     parser.add_argument(
         "--seconds", type=float, default=3600.0, help="serve this long [s] (default 3600)"
     )
-    parser.add_argument("--robot", default="ur5e", help="the robot answered as (default ur5e)")
+    robots, sensors = twin_faces("robot"), twin_faces("sensor")
+    parser.add_argument(
+        "--robot",
+        default="ur5e",
+        help="the robot answered as: "
+        + "; ".join(f"{name}, {d.summary} ({d.uri})" for name, d in robots.items())
+        + " (default ur5e)",
+    )
+    parser.add_argument(
+        "--sensor",
+        default="netft",
+        help="the wrist sensor answered as: "
+        + "; ".join(f"{name}, {d.summary} ({d.uri})" for name, d in sensors.items())
+        + " (default netft)",
+    )
     parser.add_argument(
         "--load-kg", type=float, help="a load held in the gripper [kg] (default: none)"
     )
@@ -82,8 +97,18 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--contact-log", metavar="FILE", help="write the contact log (CSV; default: not written)"
     )
+    faults = {
+        f.name: f"{f.name} ({d.twin.name}: {f.does})"
+        for d in devices()
+        if d.twin is not None
+        for f in d.twin.faults
+    }
     parser.add_argument(
-        "--fault", choices=tuple(FAULTS), help="inject this fault on demand (default: none)"
+        "--fault",
+        metavar="NAME",
+        help="inject this fault on demand, one of the two faces': "
+        + "; ".join(faults.values()).replace("%", "%%")
+        + " (default: none)",
     )
     parser.add_argument(
         "--fault-at-s",
@@ -105,11 +130,11 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--sensor-rate-hz",
         type=float,
-        default=1200.0,
+        default=None,
         metavar="R",
-        help="the Net F/T's RDT output rate [Hz]: records sent evenly at R, each a fresh "
-        "sample; a real Net F/T streams at up to 7000 Hz (up to 7000; default 1200, the "
-        "simulated sensor's rate)",
+        help="the sensor's output rate [Hz]: samples sent evenly at R, each a fresh sample, "
+        "up to the device's fastest (a Net F/T's RDT: 7000 Hz; default: the device's own, "
+        "else the simulated sensor's 1200 Hz)",
     )
     parser.add_argument(
         "--view",
@@ -139,6 +164,7 @@ def run(args: argparse.Namespace) -> int:
         sensor_host=args.sensor_host,
         seconds=args.seconds,
         robot=args.robot,
+        sensor=args.sensor,
         load_kg=args.load_kg,
         surface=args.surface,
         clearance_mm=args.clearance_mm,
@@ -166,14 +192,6 @@ def run(args: argparse.Namespace) -> int:
     finally:
         for view in observers:
             view.close()
-    print(
-        f"twin served {result.cycles} cycles ({result.late_cycles} late), "
-        f"{result.rtde_packets} RTDE packages, {result.rdt_records} RDT records; "
-        f"step p50 {result.step_us_p50:.0f} us, p99 {result.step_us_p99:.0f} us"
-        f"{'' if result.realtime else ' (no real-time priority)'}; "
-        f"ended by {result.reason}",
-        flush=True,
-    )
-    if result.timing is not None:
-        print(result.timing.line(), flush=True)
+    print(result.line(), flush=True)
+    print(result.timing.line(), flush=True)
     return 0

@@ -26,8 +26,9 @@ counted from the RDT sequence numbers (:attr:`NetFTSensor.lost_packets`).
 
 ``bias=1`` zeroes the reading at the pose the tool is in when the stream starts, gravity
 included; a calibration (``-c calibration.json``) then subtracts the tool's weight a second time
-(with nothing touching, a 0.34 kg tool reads fz = -3.35 N). :func:`check_bias_and_calibration`
-refuses the pair: use the calibration's own bias (drop ``bias=1``), or re-bias the calibration
+(with nothing touching, a 0.34 kg tool reads fz = -3.35 N). The sensor says so
+(:class:`~ftcomp.hardware.protocols.TaresInHardware`) and a session with a calibration refuses
+it: use the calibration's own bias (drop ``bias=1``), or re-bias the calibration
 gravity-aware at any still pose with ``ftcomp rebias``.
 """
 
@@ -44,7 +45,7 @@ import numpy as np
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.pacing import on_host_clock
 from ftcomp.hardware.protocols import Robot, StreamHealth, WrenchSample, WrenchSensor
-from ftcomp.hardware.registry import Uri, parse_uri
+from ftcomp.hardware.registry import Uri
 
 if TYPE_CHECKING:
     import pynetft
@@ -53,7 +54,6 @@ __all__ = [
     "FORCE_UNITS_N",
     "TORQUE_UNITS_NM",
     "NetFTSensor",
-    "check_bias_and_calibration",
     "open_sensor",
 ]
 
@@ -81,30 +81,6 @@ _DEFAULT_RDT_PORT = 49152
 _Record = tuple[int, float, float, float, float, float, float]
 
 
-def check_bias_and_calibration(sensor_uri: str, calibration: str | None) -> None:
-    """Refuse a ``netft://...?bias=1`` sensor used with a calibration file (module docstring).
-
-    Args:
-        sensor_uri: the ``--sensor`` URI (any scheme; only ``netft://`` with ``bias=1`` counts).
-        calibration: the calibration file given, or None.
-
-    Raises:
-        ParameterError: both are given.
-    """
-    if calibration is None:
-        return
-    uri = parse_uri(sensor_uri)
-    if uri.scheme != "netft":
-        return
-    flag = uri.options.get("bias", "0").lower()
-    if flag in ("1", "true", "yes"):
-        raise ParameterError(
-            f"{sensor_uri!r}: bias=1 zeroes the sensor with the tool's weight in it and "
-            f"{calibration} would subtract that weight again; drop bias=1 (the calibration's "
-            "bias is used), or re-bias the calibration at a still pose: ftcomp rebias"
-        )
-
-
 def _import_pynetft() -> Any:
     try:
         import pynetft
@@ -118,7 +94,8 @@ def _import_pynetft() -> Any:
 class NetFTSensor:
     """An ATI Net F/T sensor streaming over RDT (see the module docstring). Capabilities:
     :class:`~ftcomp.hardware.protocols.CountsLostPackets`,
-    :class:`~ftcomp.hardware.protocols.ReportsStreamHealth`.
+    :class:`~ftcomp.hardware.protocols.ReportsStreamHealth`,
+    :class:`~ftcomp.hardware.protocols.TaresInHardware`.
 
     Args:
         uri: the parsed ``netft://`` URI (for messages).
@@ -160,6 +137,8 @@ class NetFTSensor:
         self._connect_timeout_s = connect_timeout_s
         self._timeout_ns = round(timeout_s * 1e9)
         self._bias = bias
+        #: :class:`~ftcomp.hardware.protocols.TaresInHardware`: ``bias=1`` zeroes the sensor.
+        self.tares_in_hardware = bias
         # The records as numbers (_Record): each is converted once, when it is read (the
         # loop's read() converts only the newest; read_new() every one).
         self._backlog: collections.deque[_Record] = collections.deque(maxlen=_BACKLOG)

@@ -25,6 +25,7 @@ capability                 backends that have it
 :class:`ChecksReachability`  ``ur://`` (IK and safety limits), ``sim://`` (the cell's IK)
 :class:`CountsLostPackets`  ``netft://`` (RDT sequence numbers)
 :class:`ReportsStreamHealth`  ``netft://``
+:class:`TaresInHardware`   ``netft://`` (RDT's software bias, ``?bias=1``)
 =========================  =====================================================================
 
 Two things every robot states (members of :class:`Robot`, not capabilities): its clock
@@ -65,6 +66,7 @@ __all__ = [
     "Robot",
     "StreamHealth",
     "TakesControl",
+    "TaresInHardware",
     "WrenchSample",
     "WrenchSensor",
 ]
@@ -429,6 +431,23 @@ class CountsLostPackets(Protocol):
     @property
     def rate_hz(self) -> float:
         """The measured rate of arriving samples [Hz]."""
+        ...
+
+
+@runtime_checkable
+class TaresInHardware(Protocol):
+    """A sensor that can zero its readings in the device when its stream starts.
+
+    A sensor zeroed with the tool on it reads the tool's weight as zero, which a calibration
+    subtracts again: a session with a calibration refuses a sensor that tares itself
+    (``ftcomp rebias`` re-biases a calibration gravity-aware instead).
+
+    Backends: ``netft://`` (RDT's software bias, ``?bias=1``).
+    """
+
+    @property
+    def tares_in_hardware(self) -> bool:
+        """Whether this sensor zeroes its readings when its stream starts."""
         ...
 
 

@@ -5,8 +5,9 @@ A URI names a backend by its scheme, a host where it has one, and options as que
     sim://?tilt_deg=-0.204,-0.129&load_kg=0.5&grasp=1     the MuJoCo cell (robot and sensor)
     sim://                                                 the sensor of the sim:// robot
 
-Each scheme maps to a module path and a factory, imported only when a URI asks for it (the CLI
-starts fast and a backend's client library is needed only by those who use it). A robot's
+Each scheme is a device of :mod:`ftcomp.hardware.devices` (the registry), whose backend is a
+module path and a factory, imported only when a URI asks for it (the CLI starts fast and a
+backend's client library is needed only by those who use it). A robot's
 factory takes the parsed :class:`Uri`; a sensor's also gets the already opened robot, so a
 sensor that lives in the robot (the simulated cell, a UR's built-in sensor) attaches to it and
 shares its clock.
@@ -16,7 +17,6 @@ Every option a backend does not know is an error naming the URI and the valid op
 
 from __future__ import annotations
 
-import importlib
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -24,36 +24,18 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qsl, urlsplit
 
 from ftcomp.errors import ParameterError
+from ftcomp.hardware.devices import Kind, devices, load_target
 
 if TYPE_CHECKING:
     from ftcomp.hardware.protocols import Robot, WrenchSensor
 
 __all__ = [
-    "ROBOT_BACKENDS",
-    "SENSOR_BACKENDS",
     "Options",
     "Uri",
     "open_robot",
     "open_sensor",
     "parse_uri",
 ]
-
-#: Robot backends: URI scheme -> ``"module:factory"``, ``factory(uri: Uri) -> Robot``.
-ROBOT_BACKENDS: Mapping[str, str] = {
-    "sim": "ftcomp.sim.backend:open_robot",
-    "ur": "ftcomp.hardware.ur:open_robot",
-    "fixed": "ftcomp.hardware.fixed:open_robot",
-    "replay": "ftcomp.hardware.replay:open_robot",
-    "ros2": "ftcomp.ros2.live:open_robot",
-}
-#: Sensor backends: scheme -> ``"module:factory"``, ``factory(uri, robot | None) -> WrenchSensor``.
-SENSOR_BACKENDS: Mapping[str, str] = {
-    "sim": "ftcomp.sim.backend:open_sensor",
-    "netft": "ftcomp.hardware.netft:open_sensor",
-    "ur": "ftcomp.hardware.ur_sensor:open_sensor",
-    "replay": "ftcomp.hardware.replay:open_sensor",
-    "ros2": "ftcomp.ros2.live:open_sensor",
-}
 
 
 @dataclass(frozen=True)
@@ -185,24 +167,24 @@ class Options:
             )
 
 
-def _factory(backends: Mapping[str, str], uri: Uri, kind: str) -> Any:
-    target = backends.get(uri.scheme)
-    if target is None:
-        valid = ", ".join(f"{scheme}://" for scheme in backends)
+def _factory(uri: Uri, kind: Kind) -> Any:
+    known = {d.scheme: d for d in devices(kind)}
+    device = known.get(uri.scheme)
+    if device is None:
+        valid = ", ".join(f"{scheme}://" for scheme in known)
         raise ParameterError(f"{uri.text!r}: no {kind} backend {uri.scheme}://; valid: {valid}")
-    module_name, _, attribute = target.partition(":")
-    return getattr(importlib.import_module(module_name), attribute)
+    return load_target(device.backend)
 
 
 def open_robot(text: str) -> Robot:
     """The robot a URI names (not yet entered: use it in a ``with`` block)."""
     uri = parse_uri(text)
-    robot: Robot = _factory(ROBOT_BACKENDS, uri, "robot")(uri)
+    robot: Robot = _factory(uri, "robot")(uri)
     return robot
 
 
 def open_sensor(text: str, robot: Robot | None = None) -> WrenchSensor:
     """The sensor a URI names; ``robot`` is the session's robot, if any (see the module doc)."""
     uri = parse_uri(text)
-    sensor: WrenchSensor = _factory(SENSOR_BACKENDS, uri, "sensor")(uri, robot)
+    sensor: WrenchSensor = _factory(uri, "sensor")(uri, robot)
     return sensor
