@@ -38,6 +38,7 @@ LAYERS: dict[str, int] = {
     # 1. base: errors, constants, arrays, frames, the model, samples, kinematics, records, extras
     "ftcomp.arrays": 1,
     "ftcomp.calibration_record": 1,
+    "ftcomp.config_fields": 1,
     "ftcomp.constants": 1,
     "ftcomp.errors": 1,
     "ftcomp.extras": 1,

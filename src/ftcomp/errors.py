@@ -26,7 +26,18 @@ class FtcompError(Exception):
 
 
 class ParameterError(FtcompError, ValueError):
-    """A function or command-line parameter is out of its valid range or has the wrong shape."""
+    """A function or command-line parameter is out of its valid range or has the wrong shape.
+
+    Attributes:
+        fields: the config fields (or function arguments) at fault, as the message names them
+            (``field="k1"`` or ``field=("track_bias", "online_load")``; empty: none). The CLI
+            maps each back to the flag the user typed (:mod:`ftcomp.config_fields`): a library
+            message names fields, never flags.
+    """
+
+    def __init__(self, message: str, *, field: str | tuple[str, ...] | None = None) -> None:
+        super().__init__(message)
+        self.fields: tuple[str, ...] = (field,) if isinstance(field, str) else tuple(field or ())
 
 
 class InputFileError(FtcompError):

@@ -3,7 +3,9 @@
 Each command lives in its own module with a ``register(parser)`` function that adds its
 arguments and sets ``handler``; a handler returns the exit code. Only the module of the command
 being run is imported (``ftcomp --help`` loads none of them, nor numpy), so the command starts
-fast. ``FtcompError`` becomes one line ``error: ...`` on stderr and exit code 2.
+fast. ``FtcompError`` becomes one line ``error: ...`` on stderr and exit code 2; an option built
+from a config field (:mod:`ftcomp.cli.options`) is checked by the field's rule before the
+command runs, and an error the library raises on a field names the flag that set it.
 """
 
 from __future__ import annotations
@@ -126,16 +128,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ftcomp`` console script; returns the exit code."""
     args_list = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(args_list).parse_args(args_list)
+    from ftcomp.cli.options import check_field_options, error_line
     from ftcomp.errors import FtcompError
     from ftcomp.extras import require_extra
 
     name = " ".join(c for c in (args.command, vars(args).get("sim_command")) if c)
     try:
+        check_field_options(args)  # each option built from a config field, by its rule
         if name in COMMAND_EXTRAS:
             require_extra(COMMAND_EXTRAS[name], f"ftcomp {name}")
         code: int = args.handler(args)
     except FtcompError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {error_line(exc, args)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("error: interrupted", file=sys.stderr)

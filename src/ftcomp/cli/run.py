@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from typing import TYPE_CHECKING
 
 from ftcomp.cli.common import (
     add_rebias_argument,
@@ -35,15 +34,16 @@ from ftcomp.cli.common import (
 )
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import add_view_arguments
-from ftcomp.errors import ParameterError
-
-if TYPE_CHECKING:
-    from ftcomp.session.run import RunConfig
+from ftcomp.cli.options import add_field_option, map_field
+from ftcomp.control.safety import (
+    MAX_ROTATION_ACCEL_RAD_S2,
+    MAX_ROTATION_SPEED_RAD_S,
+    SafetyLimits,
+)
+from ftcomp.session.compliant import SettleRule
+from ftcomp.session.run import AdmittanceConfig, RunConfig
 
 __all__ = ["register", "run"]
-
-#: The admittance laws (ftcomp.session.run.LAWS, here so --help needs no numpy; a test checks).
-_LAWS = ("combined", "position", "velocity", "mass-damper-spring")
 
 
 def register(parser: argparse.ArgumentParser) -> None:
@@ -68,53 +68,82 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     add_track_bias_argument(parser)
     add_rebias_argument(parser)
-    p("--law", choices=_LAWS, default="combined", help="admittance law (default combined)")
-    p("--axes", default="z", help="axes that yield to force, e.g. z or x,y,z,rz (default z)")
-    p("--frame", choices=("base", "sensor"), default="base", help="axes of --axes (base)")
-    p("--k1", type=float, default=0.1, metavar="MM_PER_N", help="K1 on x, y, z [mm/N] (0.1)")
-    p("--k2", type=float, default=1.0, metavar="MM_PER_S_N", help="K2 on x, y, z [mm/(s*N)] (1)")
-    p("--k1-rot", type=float, default=0.0, metavar="DEG_PER_NM", help="K1, rotations (default 0)")
-    p("--k2-rot", type=float, default=0.0, metavar="DEG_PER_S_NM", help="K2, rotations (default 0)")
-    p("--mass-kg", type=float, default=2.0, help="mass-damper-spring M [kg, kg*m^2] (2)")
-    p("--damping", type=float, default=200.0, metavar="N_S_PER_M", help="its D (200)")
-    p("--stiffness", type=float, default=0.0, metavar="N_PER_M", help="its K (default 0: free)")
-    p(
-        "--wrench-desired",
+    map_field(parser, "online_load", "--online-load")
+    map_field(parser, "track_bias", "--track-bias")
+    add_field_option(parser, AdmittanceConfig, "law")
+    add_field_option(parser, AdmittanceConfig, "axes")
+    add_field_option(parser, AdmittanceConfig, "frame", help="frame of --axes and the gains")
+    mm, deg = 1e-3, math.radians(1.0)
+    for name, unit, metavar in (("k1", "{}/N", "{}_PER_N"), ("k2", "{}/(s*N)", "{}_PER_S_N")):
+        add_field_option(
+            parser,
+            AdmittanceConfig,
+            name,
+            scale=mm,
+            unit=unit.format("mm"),
+            element=0,
+            help=f"{name.upper()} on x, y, z",
+            metavar=metavar.format("MM"),
+        )
+        add_field_option(
+            parser,
+            AdmittanceConfig,
+            name,
+            f"--{name}-rot",
+            scale=deg,
+            unit=unit.format("deg").replace("N)", "N*m)").replace("/N", "/(N*m)"),
+            element=3,
+            help=f"{name.upper()} on rotations",
+            metavar=metavar.format("DEG").replace("_N", "_NM"),
+        )
+    add_field_option(parser, AdmittanceConfig, "mass", "--mass-kg", element=0)
+    add_field_option(parser, AdmittanceConfig, "damping", element=0, metavar="N_S_PER_M")
+    add_field_option(parser, AdmittanceConfig, "stiffness", element=0, metavar="N_PER_M")
+    add_field_option(
+        parser,
+        AdmittanceConfig,
+        "wrench_desired",
         type=lambda s: [float(v) for v in s.split(",")],
-        default=[0.0] * 6,
         metavar="FX,FY,FZ,TX,TY,TZ",
-        help="desired contact wrench in the control frame [N, N*m] (default zeros)",
     )
-    p("--filter-hz", type=float, default=20.0, help="low-pass on the contact wrench [Hz] (20)")
-    p("--max-speed-mm-s", type=float, default=20.0, help="speed limit [mm/s] (20)")
-    p("--max-accel-mm-s2", type=float, default=500.0, help="acceleration limit [mm/s^2] (500)")
-    p("--max-travel-mm", type=float, default=20.0, help="largest travel per axis [mm] (20)")
-    p("--max-rotation-deg", type=float, default=5.0, help="largest rotation per axis [deg] (5)")
-    p("--max-force-N", type=float, default=40.0, help="protective stop above [N] (40)")
-    p("--max-torque-Nm", type=float, default=8.0, help="protective stop above [N*m] (8)")
-    p("--stale-ms", type=float, default=20.0, help="a reading older than this stops [ms] (20)")
-    p(
-        "--max-identical-samples",
-        type=int,
+    add_field_option(parser, AdmittanceConfig, "filter_hz")
+    for field, flag, unit, default in (
+        ("max_twist", "--max-speed-mm-s", "mm/s", 20.0),
+        ("max_twist_rate", "--max-accel-mm-s2", "mm/s^2", 500.0),
+        ("max_travel", "--max-travel-mm", "mm", 20.0),
+    ):
+        add_field_option(
+            parser, SafetyLimits, field, flag, scale=mm, unit=unit, default=default, help=None
+        )
+    add_field_option(
+        parser,
+        SafetyLimits,
+        "max_travel",
+        "--max-rotation-deg",
+        scale=deg,
+        unit="deg",
+        default=5.0,
+        help="largest rotation per axis",
+    )
+    add_field_option(parser, SafetyLimits, "max_force_N", default=40.0)
+    add_field_option(parser, SafetyLimits, "max_torque_Nm", default=8.0)
+    add_field_option(
+        parser, SafetyLimits, "stale_after_s", "--stale-ms", scale=mm, unit="ms", default=20.0
+    )
+    add_field_option(
+        parser,
+        SafetyLimits,
+        "max_identical_samples",
         default=5,
+        off=0,
         metavar="N",
         help="new readings identical to the last that stop as a frozen sensor, beyond N "
-        "(default 5; 0: no check, for a noiseless simulation); docs/control.md",
+        "(off for a noiseless simulation; docs/control.md)",
     )
-    p(
-        "--max-late-cycles",
-        type=int,
-        default=10,
-        help="periods the loop may fall behind the robot's schedule before it stops: stalls, net "
-        "of the slack since (10)",
-    )
-    p("--seconds", type=float, default=30.0, help="longest run [s] (30)")
-    p(
-        "--settle-band-N",
-        type=float,
-        help="end once the selected force error stays this small [N] (default: run --seconds)",
-    )
-    p("--settle-s", type=float, default=0.3, help="... for this long [s] (0.3)")
+    add_field_option(parser, RunConfig, "max_late_cycles")
+    add_field_option(parser, RunConfig, "duration_s", "--seconds")
+    add_field_option(parser, SettleRule, "band_N", "--settle-band-N", none_means="run --seconds")
+    add_field_option(parser, SettleRule, "hold_s", "--settle-s")
     p("--dry-run", action="store_true", help="compute and log commands, send none")
     p("-o", "--output", required=True, metavar="RUN.csv", help="the log, one row per cycle")
     p("--force", action="store_true", help="replace an existing output file")
@@ -123,37 +152,7 @@ def register(parser: argparse.ArgumentParser) -> None:
 
 
 def _check(args: argparse.Namespace) -> None:
-    if args.track_bias and args.online_load:
-        raise ParameterError("--track-bias and --online-load: choose one")
     check_rebias_argument(args)
-    if len(args.wrench_desired) != 6 or not all(map(math.isfinite, args.wrench_desired)):
-        raise ParameterError("--wrench-desired needs six finite numbers FX,FY,FZ,TX,TY,TZ")
-    for name in ("k1", "k2", "k1_rot", "k2_rot", "damping", "stiffness"):
-        value = getattr(args, name)
-        if not (math.isfinite(value) and value >= 0.0):
-            raise ParameterError(f"--{name.replace('_', '-')} must be >= 0, got {value:g}")
-    for name in (
-        "mass_kg",
-        "filter_hz",
-        "max_speed_mm_s",
-        "max_accel_mm_s2",
-        "max_travel_mm",
-        "max_rotation_deg",
-        "max_force_N",
-        "max_torque_Nm",
-        "stale_ms",
-        "seconds",
-        "settle_s",
-    ):
-        value = getattr(args, name)
-        if not (math.isfinite(value) and value > 0.0):
-            raise ParameterError(f"--{name.replace('_', '-')} must be > 0, got {value:g}")
-    if args.max_identical_samples < 0:
-        raise ParameterError(
-            f"--max-identical-samples must be >= 0, got {args.max_identical_samples}"
-        )
-    if args.max_late_cycles < 1:
-        raise ParameterError(f"--max-late-cycles must be >= 1, got {args.max_late_cycles}")
 
 
 def _config(args: argparse.Namespace) -> RunConfig:
@@ -161,14 +160,13 @@ def _config(args: argparse.Namespace) -> RunConfig:
     import numpy as np
 
     from ftcomp.compensation.bias_tracking import BiasTrackingConfig
-    from ftcomp.control.safety import SafetyLimits
-    from ftcomp.session.compliant import SettleRule
-    from ftcomp.session.run import AdmittanceConfig, RunConfig
 
     travel, rotation = args.max_travel_mm * 1e-3, math.radians(args.max_rotation_deg)
     limits = SafetyLimits(
-        max_twist=np.array([args.max_speed_mm_s * 1e-3] * 3 + [0.5] * 3),
-        max_twist_rate=np.array([args.max_accel_mm_s2 * 1e-3] * 3 + [5.0] * 3),
+        max_twist=np.array([args.max_speed_mm_s * 1e-3] * 3 + [MAX_ROTATION_SPEED_RAD_S] * 3),
+        max_twist_rate=np.array(
+            [args.max_accel_mm_s2 * 1e-3] * 3 + [MAX_ROTATION_ACCEL_RAD_S2] * 3
+        ),
         max_travel=np.array([travel] * 3 + [rotation] * 3),
         max_force_N=args.max_force_N,
         max_torque_Nm=args.max_torque_Nm,

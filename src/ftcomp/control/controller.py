@@ -50,9 +50,11 @@ from ftcomp.control.safety import (
 )
 from ftcomp.errors import ParameterError
 
-__all__ = ["AdmittanceController", "ControlFrame", "ControllerState"]
+__all__ = ["CONTROL_FRAMES", "AdmittanceController", "ControlFrame", "ControllerState"]
 
 ControlFrame = Literal["base", "sensor"]
+#: The control frames a controller can act in.
+CONTROL_FRAMES: tuple[ControlFrame, ...] = ("base", "sensor")
 
 
 class ControllerState(NamedTuple):
@@ -118,7 +120,7 @@ class AdmittanceController:
     wrench_desired: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
 
     def __post_init__(self) -> None:
-        if self.frame not in ("base", "sensor"):
+        if self.frame not in CONTROL_FRAMES:
             raise ParameterError(f"frame must be 'base' or 'sensor', got {self.frame!r}")
         w = np.array(self.wrench_desired, dtype=float)
         if w.shape != (6,) or not np.all(np.isfinite(w)):

@@ -25,9 +25,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.arrays import frozen_array
+from ftcomp.config_fields import check_fields, param
 from ftcomp.errors import ParameterError
 
 __all__ = [
+    "MAX_ROTATION_ACCEL_RAD_S2",
+    "MAX_ROTATION_SPEED_RAD_S",
     "SafetyLimits",
     "StopReason",
     "WatchdogState",
@@ -37,6 +40,13 @@ __all__ = [
     "check_wrench",
     "limit_twist",
 ]
+
+
+#: The rotation speed limit of a session that limits only its translation by choice (``ftcomp
+#: run``, a placement) [rad/s]: a rotation K1/K2 of 1 deg/(N*m) turns this fast under 30 N*m.
+MAX_ROTATION_SPEED_RAD_S = 0.5
+#: Its rotation acceleration limit [rad/s^2].
+MAX_ROTATION_ACCEL_RAD_S2 = 5.0
 
 
 class StopReason(str, enum.Enum):
@@ -62,7 +72,7 @@ def _positive6(name: str, value: ArrayLike) -> NDArray[np.float64]:
         arr = np.full(6, float(arr))
     if arr.shape != (6,) or not np.all(arr > 0.0):
         raise ParameterError(
-            f"{name} must be > 0 on all six axes, got {np.asarray(value).tolist()}"
+            f"{name} must be > 0 on all six axes, got {np.asarray(value).tolist()}", field=name
         )
     return frozen_array(arr, (6,), name=name)
 
@@ -92,14 +102,34 @@ class SafetyLimits:
             force limit. None: no check.
     """
 
-    max_twist: NDArray[np.float64]
-    max_twist_rate: NDArray[np.float64]
-    max_travel: NDArray[np.float64]
-    max_force_N: float
-    max_torque_Nm: float
-    stale_after_s: float
-    max_repeated_samples: int | None = 0
-    max_identical_samples: int | None = None
+    max_twist: NDArray[np.float64] = param(
+        gt=0.0, length=6, allow_inf=True, unit="m/s, rad/s", help="speed limit"
+    )
+    max_twist_rate: NDArray[np.float64] = param(
+        gt=0.0, length=6, allow_inf=True, unit="m/s^2, rad/s^2", help="acceleration limit"
+    )
+    max_travel: NDArray[np.float64] = param(
+        gt=0.0, length=6, allow_inf=True, unit="m, rad", help="largest travel per axis"
+    )
+    max_force_N: float = param(gt=0.0, allow_inf=True, unit="N", help="protective stop above")
+    max_torque_Nm: float = param(gt=0.0, allow_inf=True, unit="N*m", help="protective stop above")
+    stale_after_s: float = param(
+        gt=0.0, allow_inf=True, unit="s", help="a reading older than this stops"
+    )
+    max_repeated_samples: int | None = param(
+        0,
+        ge=0,
+        integer=True,
+        optional=True,
+        help="samples with an already seen time stamp tolerated in a row",
+    )
+    max_identical_samples: int | None = param(
+        None,
+        ge=1,
+        integer=True,
+        optional=True,
+        help="new readings identical to the last that stop as a frozen sensor, beyond this many",
+    )
     sensor_range: tuple[float, float] | None = None
     # sensor_range per axis, [F, F, F, T, T, T], prepared once for check_range.
     _range_per_axis: NDArray[np.float64] | None = field(init=False, repr=False, compare=False)
@@ -107,21 +137,23 @@ class SafetyLimits:
     def __post_init__(self) -> None:
         for name in ("max_twist", "max_twist_rate", "max_travel"):
             object.__setattr__(self, name, _positive6(name, getattr(self, name)))
-        for name in ("max_force_N", "max_torque_Nm", "stale_after_s"):
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and value > 0.0 and not math.isnan(value)):
-                raise ParameterError(f"{name} must be > 0, got {value!r}")
-        m = self.max_repeated_samples
-        if m is not None and not (isinstance(m, int) and m >= 0):
-            raise ParameterError(f"max_repeated_samples must be an integer >= 0, got {m!r}")
-        n = self.max_identical_samples
-        if n is not None and not (isinstance(n, int) and n >= 1):
-            raise ParameterError(f"max_identical_samples must be an integer >= 1, got {n!r}")
+        check_fields(
+            self,
+            (
+                "max_force_N",
+                "max_torque_Nm",
+                "stale_after_s",
+                "max_repeated_samples",
+                "max_identical_samples",
+            ),
+        )
         r = self.sensor_range
         if r is not None and not (
             len(r) == 2 and all(isinstance(v, (int, float)) and v > 0.0 for v in r)
         ):
-            raise ParameterError(f"sensor_range must be (force_N, torque_Nm) > 0, got {r!r}")
+            raise ParameterError(
+                f"sensor_range must be (force_N, torque_Nm) > 0, got {r!r}", field="sensor_range"
+            )
         per_axis = None if r is None else frozen_array(np.repeat(r, 3), (6,), name="sensor_range")
         object.__setattr__(self, "_range_per_axis", per_axis)
 

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp.config_fields import check_fields, param
 from ftcomp.control.controller import AdmittanceController, ControllerState
 from ftcomp.control.filters import LowPassFilter
 from ftcomp.control.loop import Reading
@@ -58,18 +59,15 @@ class SettleRule:
     the rule's slower filter only keeps sensor noise out of the decision.
     """
 
-    band_N: float
-    hold_s: float = 0.3
-    cutoff_hz: float = 2.0
-    then_hold_s: float = 0.0
+    band_N: float = param(
+        gt=0.0, unit="N", help="end once the selected force error stays this small"
+    )
+    hold_s: float = param(0.3, gt=0.0, unit="s", help="... for this long")
+    cutoff_hz: float = param(2.0, gt=0.0, unit="Hz", help="low-pass of the error judged")
+    then_hold_s: float = param(0.0, ge=0.0, unit="s", help="control kept on after settling")
 
     def __post_init__(self) -> None:
-        for name in ("band_N", "hold_s", "cutoff_hz"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ParameterError(f"settle {name} must be > 0, got {value}")
-        if not (math.isfinite(self.then_hold_s) and self.then_hold_s >= 0.0):
-            raise ParameterError(f"settle then_hold_s must be >= 0, got {self.then_hold_s}")
+        check_fields(self)
 
 
 class Settling:

@@ -29,7 +29,8 @@ from numpy.typing import NDArray
 from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.bias_tracking import BiasTracker, BiasTrackingConfig
 from ftcomp.compensation.compensator import GravityCompensator
-from ftcomp.control.controller import AdmittanceController, ControlFrame
+from ftcomp.config_fields import check_fields, param
+from ftcomp.control.controller import CONTROL_FRAMES, AdmittanceController, ControlFrame
 from ftcomp.control.filters import LowPassFilter
 from ftcomp.control.laws import (
     AdmittanceLaw,
@@ -100,18 +101,12 @@ RUN_COLUMNS = (
 )
 
 
-def _vector6(name: str, value: object, *, positive: bool) -> tuple[float, ...]:
-    arr = np.asarray(value, dtype=float).reshape(-1)
-    if arr.shape != (6,) or not np.all(np.isfinite(arr)):
-        raise ParameterError(f"{name} needs six finite values, got {arr.tolist()}")
-    if np.any(arr <= 0.0 if positive else arr < 0.0):
-        raise ParameterError(f"{name} must be {'>' if positive else '>='} 0, got {arr.tolist()}")
-    return tuple(arr.tolist())
-
-
 @dataclass(frozen=True)
 class AdmittanceConfig:
     """The admittance controller of a run, in SI units (see :mod:`ftcomp.control.laws`).
+
+    Each field's unit and range are declared with it (:func:`~ftcomp.config_fields.param`);
+    vectors are per axis ``[x, y, z, rx, ry, rz]``.
 
     Attributes:
         limits: the safety envelope (base-frame axes).
@@ -129,32 +124,41 @@ class AdmittanceConfig:
     """
 
     limits: SafetyLimits
-    law: LawName = "combined"
-    axes: str = "z"
-    frame: ControlFrame = "base"
-    k1: tuple[float, ...] = (1e-4, 1e-4, 1e-4, 0.0, 0.0, 0.0)
-    k2: tuple[float, ...] = (1e-3, 1e-3, 1e-3, 0.0, 0.0, 0.0)
-    mass: tuple[float, ...] = (2.0,) * 6
-    damping: tuple[float, ...] = (200.0,) * 6
-    stiffness: tuple[float, ...] = (0.0,) * 6
-    wrench_desired: tuple[float, ...] = (0.0,) * 6
-    filter_hz: float = 20.0
+    law: LawName = param("combined", choices=LAWS, help="admittance law")
+    axes: str = param("z", help="axes that yield to force, e.g. z or x,y,z,rz")
+    frame: ControlFrame = param(
+        "base", choices=CONTROL_FRAMES, help="frame of the axes, gains and desired wrench"
+    )
+    k1: tuple[float, ...] = param(
+        (1e-4, 1e-4, 1e-4, 0.0, 0.0, 0.0), ge=0.0, length=6, unit="m/N, rad/(N*m)", help="K1"
+    )
+    k2: tuple[float, ...] = param(
+        (1e-3, 1e-3, 1e-3, 0.0, 0.0, 0.0),
+        ge=0.0,
+        length=6,
+        unit="m/(s*N), rad/(s*N*m)",
+        help="K2",
+    )
+    mass: tuple[float, ...] = param(
+        (2.0,) * 6, gt=0.0, length=6, unit="kg, kg*m^2", help="mass-damper-spring M"
+    )
+    damping: tuple[float, ...] = param(
+        (200.0,) * 6, ge=0.0, length=6, unit="N*s/m, N*m*s/rad", help="mass-damper-spring D"
+    )
+    stiffness: tuple[float, ...] = param(
+        (0.0,) * 6, ge=0.0, length=6, unit="N/m, N*m/rad", help="mass-damper-spring K (0: free)"
+    )
+    wrench_desired: tuple[float, ...] = param(
+        (0.0,) * 6, length=6, unit="N, N*m", help="desired contact wrench in the control frame"
+    )
+    filter_hz: float = param(20.0, gt=0.0, unit="Hz", help="low-pass on the contact wrench")
 
     def __post_init__(self) -> None:
-        if self.law not in LAWS:
-            raise ParameterError(f"law must be one of {', '.join(LAWS)}, got {self.law!r}")
-        if self.frame not in ("base", "sensor"):
-            raise ParameterError(f"frame must be 'base' or 'sensor', got {self.frame!r}")
-        selection_matrix(self.axes)  # names the bad axis
-        for name in ("k1", "k2", "damping", "stiffness"):
-            object.__setattr__(self, name, _vector6(name, getattr(self, name), positive=False))
-        object.__setattr__(self, "mass", _vector6("mass", self.mass, positive=True))
-        w = np.asarray(self.wrench_desired, dtype=float).reshape(-1)
-        if w.shape != (6,) or not np.all(np.isfinite(w)):
-            raise ParameterError(f"wrench_desired needs six finite values, got {w.tolist()}")
-        object.__setattr__(self, "wrench_desired", tuple(w.tolist()))
-        if not (math.isfinite(self.filter_hz) and self.filter_hz > 0.0):
-            raise ParameterError(f"filter_hz must be > 0, got {self.filter_hz}")
+        check_fields(self)
+        try:
+            selection_matrix(self.axes)  # names the bad axis
+        except ParameterError as exc:
+            raise ParameterError(f"axes: {exc}", field="axes") from None
 
     def law_for(self) -> AdmittanceLaw:
         """The law with these gains and selection."""
@@ -200,20 +204,25 @@ class RunConfig:
     """
 
     admittance: AdmittanceConfig
-    duration_s: float = 30.0
+    duration_s: float = param(30.0, gt=0.0, unit="s", help="longest run")
     settle: SettleRule | None = None
     dry_run: bool = False
-    max_late_cycles: int = 10
+    max_late_cycles: int = param(
+        10,
+        ge=1,
+        integer=True,
+        help="periods the loop may fall behind the robot's schedule before it stops: stalls, "
+        "net of the slack since",
+    )
     online_load: bool = False
     track_bias: BiasTrackingConfig | None = None
 
     def __post_init__(self) -> None:
         if self.track_bias is not None and self.online_load:
-            raise ParameterError("track the bias or weigh a load online, not both")
-        if not (math.isfinite(self.duration_s) and self.duration_s > 0.0):
-            raise ParameterError(f"duration_s must be > 0, got {self.duration_s}")
-        if not (isinstance(self.max_late_cycles, int) and self.max_late_cycles >= 1):
-            raise ParameterError(f"max_late_cycles must be >= 1, got {self.max_late_cycles}")
+            raise ParameterError(
+                "track_bias and online_load: choose one", field=("track_bias", "online_load")
+            )
+        check_fields(self)
 
 
 @dataclass(frozen=True)
