@@ -1,8 +1,9 @@
 """Start ``ftcomp twin`` in its own process and stop it: ``with running_twin(name) as twin``.
 
 The twin gets two loopback addresses of the test's own (robot, sensor), prints
-``twin ready: ...`` once every socket is bound, ends by itself after ``seconds`` and is
-terminated (SIGTERM, then killed) when the block ends.
+``twin ready: robot URI sensor URI`` once every socket is bound (the URIs its faces answer
+on), ends by itself after ``seconds`` and is terminated (SIGTERM, then killed) when the block
+ends. ``--robot FACE --sensor FACE`` among ``args`` choose the faces.
 """
 
 from __future__ import annotations
@@ -32,25 +33,24 @@ class Twin:
     sensor_host: str
     proc: subprocess.Popen[str]
     drain: Drain
+    robot_uri: str
+    sensor_uri: str
 
     def output(self) -> str:
         """The twin's last lines (its timing line at the end, late cycles on stderr)."""
         return "ftcomp twin said:\n" + self.drain.text()
 
-    @property
-    def robot_uri(self) -> str:
-        return f"ur://{self.robot_host}"
-
-    @property
-    def sensor_uri(self) -> str:
-        return f"netft://{self.sensor_host}"
-
 
 @contextmanager
 def running_twin(
-    name: str, *args: str, seconds: float = 60.0, ready_timeout_s: float = 30.0
+    name: str,
+    *args: str,
+    seconds: float = 60.0,
+    ready_timeout_s: float = 30.0,
+    env: dict[str, str] | None = None,
 ) -> Iterator[Twin]:
-    """``ftcomp twin`` with ``args`` on two addresses derived from ``name``."""
+    """``ftcomp twin`` with ``args`` on two addresses derived from ``name`` (in ``env``, by
+    default this process's environment)."""
     robot_host = loopback_address(name, 1)
     sensor_host = loopback_address(name, 2)
     command = [
@@ -67,7 +67,11 @@ def running_twin(
         *args,
     ]
     proc = subprocess.Popen(
-        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ)
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=dict(os.environ) if env is None else env,
     )
     drain = None
     try:
@@ -84,7 +88,9 @@ def running_twin(
             _, err = proc.communicate(timeout=5)
             raise RuntimeError(f"ftcomp twin did not start: {line!r} {err[-2000:]}")
         drain = Drain(proc)
-        yield Twin(robot_host, sensor_host, proc, drain)
+        words = line.split()  # twin ready: robot URI sensor URI
+        robot_uri, sensor_uri = words[words.index("robot") + 1], words[words.index("sensor") + 1]
+        yield Twin(robot_host, sensor_host, proc, drain, robot_uri, sensor_uri)
     finally:
         if proc.poll() is None:
             proc.terminate()

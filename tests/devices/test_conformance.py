@@ -1,0 +1,285 @@
+"""The device conformance suite: every robot face x sensor face of the twin, through the real
+client libraries, the whole first session and every declared fault.
+
+For each pair the registry (:mod:`ftcomp.hardware.devices`) declares, against ``ftcomp twin
+--robot R --sensor S``, with the URIs its ready line names:
+
+- ``poses design --robot URI`` -> ``record`` at the designed poses -> ``calibrate``: the
+  13 identified numbers each within its family bound of the twin's truth, and the 12
+  parameters jointly (their Mahalanobis distance through the fit's covariance, F(12, 42));
+- ``stream`` with that calibration: a whole log whose contact wrench is the noise around zero;
+- ``run`` sets a 0.5 kg load down on the sponge and on the book gently (the twin's contact
+  log: never pressed beyond the weight by more than 0.3 N, the surface carrying it all within
+  0.05 N at the end, no safety stop);
+- each fault a face declares, injected by the twin, ends ``run`` as the declaration says
+  (its message, exit 1, "the robot was stopped", within ``seen_within_s`` of the fault), or
+  leaves it running to its end; the log whole and the timing reported either way.
+
+A device added to the registry (also from a module named in ``FTCOMP_DEVICES``) is picked up
+here with no change to this file; a pair whose client library is not installed is skipped
+with its name (``TwinFace.requires``).
+"""
+
+from __future__ import annotations
+
+import csv
+import importlib.util
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from scipy import stats
+
+pytest.importorskip("mujoco")
+
+from ftcomp.calibration.identify import pose_means
+from ftcomp.calibration.methods import fit_method
+from ftcomp.hardware.devices import Device, Fault, twin_faces
+from ftcomp.io.samples_csv import read_samples
+from standins.twin_process import calibration_from_truth, running_twin
+
+TILT = "--tilt-deg=-0.204,-0.129"
+LOAD_WEIGHT_N = 0.5 * 9.81
+KEYS = ("tool_weight_N", "center_of_gravity_m", "force_bias_N", "torque_bias_Nm")
+#: ``ftcomp`` as a user runs it (the live loop sets the interpreter's switch interval and asks
+#: for real-time priority itself).
+CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"
+
+
+def _pairs() -> list[Any]:
+    pairs = []
+    for robot_name, robot in twin_faces("robot").items():
+        for sensor_name, sensor in twin_faces("sensor").items():
+            missing = [
+                m
+                for d in (robot, sensor)
+                for m in (d.twin.requires if d.twin else ())
+                if importlib.util.find_spec(m) is None
+            ]
+            marks = [pytest.mark.skip(reason=f"not installed: {', '.join(missing)}")] * bool(
+                missing
+            )
+            pairs.append(
+                pytest.param((robot, sensor), id=f"{robot_name}-{sensor_name}", marks=marks)
+            )
+    return pairs
+
+
+def _faults() -> list[Any]:
+    cases = []
+    for pair in _pairs():
+        robot, sensor = pair.values[0]
+        seen: set[str] = set()
+        for device in (robot, sensor):
+            for fault in device.twin.faults:
+                if fault.name not in seen:
+                    seen.add(fault.name)
+                    cases.append(
+                        pytest.param(
+                            (robot, sensor), fault, id=f"{pair.id}-{fault.name}", marks=pair.marks
+                        )
+                    )
+    return cases
+
+
+Pair = tuple[Device, Device]
+
+
+def _faces(pair: Pair) -> tuple[str, ...]:
+    robot, sensor = pair
+    assert robot.twin is not None and sensor.twin is not None
+    return ("--robot", robot.twin.name, "--sensor", sensor.twin.name)
+
+
+def _ftcomp(*args: str, timeout_s: float = 120.0) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-c", CLIENT, *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout_s,
+        check=False,
+        env=dict(os.environ),
+    )
+
+
+def _with_options(uri: str, options: str) -> str:
+    if not options:
+        return uri
+    return uri + ("&" if "?" in uri else "?") + options
+
+
+def _rows(path: Path) -> tuple[list[str], list[list[str]]]:
+    """A log's header and rows, checked whole: every row complete, times finite and in order."""
+    with path.open() as f:
+        rows = list(csv.reader(f))
+    header, body = rows[0], rows[1:]
+    assert body and all(len(row) == len(header) for row in body), path
+    t_s = [float(row[0]) for row in body]
+    assert all(math.isfinite(t) for t in t_s) and t_s == sorted(t_s), path
+    return header, body
+
+
+@pytest.fixture(scope="module", params=_pairs())
+def session(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> dict:
+    """One pair's first session on a fresh twin: poses designed on the robot, recorded,
+    calibrated, then a stream with that calibration. The files and what each command said."""
+    pair: Pair = request.param
+    robot, _ = pair
+    assert robot.twin is not None
+    pair_id = f"{pair[0].scheme}-{pair[1].scheme}"
+    folder = tmp_path_factory.mktemp(f"conformance-{pair_id}")
+    files = {name: folder / name for name in ("truth.json", "poses.csv", "s.csv", "cal.json")}
+    files["stream"] = folder / "stream.csv"
+    name = f"conformance_{pair_id}"
+    with running_twin(name, *_faces(pair), "--truth", str(files["truth.json"]), TILT) as twin:
+        robot_uri = _with_options(twin.robot_uri, robot.twin.record_options)
+        design = _ftcomp(
+            "poses", "design", "--count", "9", "--max-tilt-deg", "35", "--position-mm", "450",
+            "0", "420", "--robot", twin.robot_uri, "-o", str(files["poses.csv"]),
+        )  # fmt: skip
+        assert design.returncode == 0, design.stderr + twin.output()
+        recorded = _ftcomp(
+            "record", "--robot", robot_uri, "--sensor", twin.sensor_uri, "--poses",
+            str(files["poses.csv"]), "--samples-per-pose", "60", "--move-s", "0.5",
+            "-o", str(files["s.csv"]),
+        )  # fmt: skip
+        assert recorded.returncode == 0, recorded.stderr + twin.output()
+        calibrated = _ftcomp("calibrate", str(files["s.csv"]), "-o", str(files["cal.json"]))
+        assert calibrated.returncode == 0, calibrated.stderr
+        streamed = _ftcomp(
+            "stream", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri, "-c",
+            str(files["cal.json"]), "--seconds", "2", "-o", str(files["stream"]),
+        )  # fmt: skip
+        assert streamed.returncode == 0, streamed.stdout + streamed.stderr + twin.output()
+    return {"pair": pair, "files": files, "stream": streamed}
+
+
+#: The 13 identified numbers are checked at once, each a t-statistic with 42 degrees of freedom
+#: (the covariance is scaled by the residual variance of 54 numbers less 12 parameters). At 3
+#: standard errors each, 5.8 % of correct calibrations would fail one of the 13; the bound that
+#: keeps the family's false alarms at 3 sigma's 0.27 % is t(42) at 1 - 0.0027 / 26: 4.06.
+Z_MAX = 4.06
+#: The 12 parameters together: their Mahalanobis distance from the truth through the fit's own
+#: covariance, over 12, is F(12, 42) for a correct calibration (the numbers are strongly
+#: correlated, weight with gravity's z at -1.0 and the torque bias with the centre of gravity at
+#: -0.96, so no sum of their squares alone has a known law). Beyond F's 1 - 0.0027 quantile,
+#: 3.18, 0.27 % of the time.
+F_QUANTILE = 1.0 - 0.0027
+
+
+def test_record_at_designed_poses_then_calibrate_recovers_the_truth(session: dict) -> None:
+    files = session["files"]
+    found = json.loads(files["cal.json"].read_text())
+    true = json.loads(files["truth.json"].read_text())
+    for key in (*KEYS, "gravity_in_base_N"):
+        error = np.atleast_1d(found[key]) - np.atleast_1d(true[key])
+        se = np.atleast_1d(found["std_errors"][key])
+        assert np.all(np.abs(error) <= Z_MAX * se), (key, error, se)
+    # The joint fit again (what ``calibrate`` ran) for its whole covariance.
+    ids, R, wrench, count, var_mean = pose_means(read_samples(files["s.csv"]))
+    assert len(ids) == 9
+    fit, _ = fit_method("joint", wrench, R, var_mean, count)
+    assert np.allclose(fit.theta[:3], found["gravity_in_base_N"], rtol=1e-9, atol=1e-12)
+    keys = ("gravity_in_base_N", "force_bias_N", "torque_bias_Nm", "center_of_gravity_m")
+    error = fit.theta[:12] - np.concatenate([true[key] for key in keys])
+    f = float(error @ np.linalg.solve(fit.covariance[:12, :12], error)) / 12
+    assert f <= stats.f.ppf(F_QUANTILE, 12, 6 * len(ids) - 12), f
+
+
+def test_stream_with_the_calibration_reads_no_contact(session: dict) -> None:
+    header, rows = _rows(session["files"]["stream"])
+    ext = np.array([[float(r[header.index(k)]) for k in ("cfx", "cfy", "cfz")] for r in rows])
+    assert len(rows) >= 100
+    # nothing touches the tool: the compensated force is the sensor's noise around zero (the
+    # twin's wrist sensor: 0.02-0.05 N per axis; the calibration's error a few hundredths more)
+    assert np.all(np.abs(ext.mean(axis=0)) < 0.1), ext.mean(axis=0)
+
+
+#: The paper's gains per surface (``ftcomp sim place``'s defaults): on the stiff book K1 = 0 and
+#: K2 = 0.1 mm/(s*N). With the sponge's (K1 0.1 mm/N, K2 1) the force loop's time constant on
+#: the book, 1 / (K2 * stiffness) with ~1.4e5 N/m from command to force, is 7 ms: shorter than
+#: the loop's round trip through the twin (3-4 cycles), so it rings and presses 50-140 N.
+GAINS = {"sponge": ("--k1", "0.1", "--k2", "1"), "book": ("--k1", "0", "--k2", "0.1")}
+ERROR = re.compile(r"mean force error over the last 0\.3 s \[(\S+) (\S+) (\S+)\]")
+
+
+@pytest.mark.parametrize("surface", ["sponge", "book"])
+def test_run_sets_a_half_kilogram_load_down_gently(
+    session: dict, surface: str, tmp_path: Path
+) -> None:
+    pair, calibration = session["pair"], session["files"]["cal.json"]
+    contact, log = tmp_path / "contact.csv", tmp_path / "run.csv"
+    options = ("--load-kg", "0.5", "--surface", surface, "--clearance-mm", "2", TILT)
+    name = f"conformance_{surface}_{pair[0].scheme}_{pair[1].scheme}"
+    with running_twin(name, *_faces(pair), *options, "--contact-log", str(contact)) as twin:
+        done = _ftcomp(
+            "run", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri,
+            "-c", str(calibration), "--control", "admittance", "--axes", "z",
+            *GAINS[surface], "--settle-band-N", "0.03", "--seconds", "30",
+            "--max-late-cycles", "50",  # a shared CI host: the client process is not real-time
+            # nor is the twin, hardware's stand-in, on the same two cores: readings 18-19 ms
+            # old were seen in runs that passed, one 20 ms stopped a CI run. A stale sensor's
+            # stop at 20 ms is tested with the faults below (rdt-loss, network-loss).
+            "--stale-ms", "50",
+            "-o", str(log),
+        )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr + twin.output()
+    assert "settled" in done.stdout
+    _rows(log)
+    with contact.open() as f:
+        rows = list(csv.DictReader(f))
+    fz = np.array([float(r["fz"]) for r in rows])  # the surface pushing up (base z ~ up)
+    assert fz.max() <= LOAD_WEIGHT_N + 0.3  # never pressed in beyond the weight
+    # The surface carries it all (within 0.05 N). The run ends as its error enters the settle
+    # band, so the band (0.03 N) takes part of that and the calibration's error along z the rest.
+    assert fz[-1] == pytest.approx(LOAD_WEIGHT_N, abs=0.05)
+    assert all(r["safety"] == "normal" for r in rows)
+    # The lateral contact (on the book the arm's servo springback held by friction, about 2 N;
+    # on the sponge, which shears, almost none) is the lateral force the run reports at its end.
+    found = ERROR.search(done.stdout)
+    assert found is not None, done.stdout
+    reported = np.array([float(found[1]), float(found[2])])
+    lateral = np.array([float(rows[-1]["fx"]), float(rows[-1]["fy"])])
+    assert np.all(np.abs(lateral - reported) <= 0.25), (lateral, reported)
+
+
+FAULT_AT_S = 0.5
+SECONDS = 3.0
+
+
+@pytest.mark.parametrize(("pair", "fault"), _faults())
+def test_each_declared_fault_ends_run_as_declared_with_a_valid_log(
+    pair: Pair, fault: Fault, tmp_path: Path
+) -> None:
+    truth, calibration, log = tmp_path / "truth.json", tmp_path / "cal.json", tmp_path / "run.csv"
+    options = ("--truth", str(truth), "--fault", fault.name, "--fault-at-s", str(FAULT_AT_S))
+    name = f"conformance_fault_{pair[0].scheme}_{pair[1].scheme}_{fault.name}"
+    with running_twin(name, *_faces(pair), *options) as twin:
+        calibration_from_truth(truth, calibration)
+        done = _ftcomp(
+            "run", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri, "-c",
+            str(calibration), "--control", "admittance", "--axes", "z", "--settle-band-N",
+            "0.0001", "--seconds", str(SECONDS), "--max-late-cycles", "50", "-o", str(log),
+            timeout_s=30.0,  # the guard against a hang (a stop sent into a silent controller)
+        )  # fmt: skip
+    _, rows = _rows(log)
+    t_last = float(rows[-1][0])
+    said = done.stdout + done.stderr + twin.output()
+    # the run reports its timing, and saves the block beside its log
+    assert "timing: " in done.stdout, said
+    assert json.loads((tmp_path / "run.timing.json").read_text())["cycles"] > 0
+    if fault.run_says is None:  # within the limits: no fault, the run goes on to its end
+        assert done.returncode == 0, said
+        assert SECONDS - 0.1 <= t_last <= SECONDS + 0.1, t_last
+        return
+    assert done.returncode == 1, said
+    assert fault.run_says in done.stderr and "the robot was stopped" in done.stderr, said
+    # the run's clock starts with the robot's stream, the fault's clock too
+    assert t_last <= FAULT_AT_S + fault.seen_within_s, t_last
