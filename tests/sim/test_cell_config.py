@@ -89,7 +89,7 @@ def test_a_bad_field_is_one_error_naming_it(kwargs: dict[str, object], message: 
 def test_a_bad_uri_option_names_the_uri_and_the_field() -> None:
     with pytest.raises(ParameterError, match=r"^'sim://\?load_kg=9': load_kg must be in"):
         open_robot("sim://?load_kg=9")
-    with pytest.raises(ParameterError, match="arm='franka': expected one of c4, ur5e"):
+    with pytest.raises(ParameterError, match="arm='franka': expected one of c4, fr3, ur5e"):
         open_robot("sim://?arm=franka")
 
 

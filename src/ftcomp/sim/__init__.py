@@ -1,6 +1,6 @@
-"""The simulated robot cell on MuJoCo: a six-axis arm (the C4-like arm, or the UR5e from its DH
-table: :func:`ur5e_arm`), a wrist F/T sensor, a gripper, loads,
-and a table with a sponge pad or a book.
+"""The simulated robot cell on MuJoCo: an arm (the six-axis C4-like arm, or any serial arm given
+by its DH table: :func:`ur5e_arm`, the seven-joint :func:`fr3_arm`), a wrist F/T sensor, a
+gripper, loads, and a table with a sponge pad or a book; :class:`CellConfig` describes one.
 
 :class:`SimCell` implements :class:`ftcomp.hardware.protocols.Robot`; ``cell.sensor`` implements
 :class:`ftcomp.hardware.protocols.WrenchSensor`; ``sim://`` URIs open them (:mod:`.backend`).
@@ -44,7 +44,16 @@ from ftcomp.extras import require_extra
 
 require_extra("sim", "the simulated cell (ftcomp sim, sim://)")
 
-from ftcomp.sim.arm import ARM_JOINT_NAMES, ARMS, ArmSpec, DHArmSpec, c4_like_arm, ur5e_arm
+from ftcomp.sim.arm import (
+    ARM_JOINT_NAMES,
+    ARMS,
+    ArmSpec,
+    DHArmSpec,
+    c4_like_arm,
+    dh_flange_pose,
+    fr3_arm,
+    ur5e_arm,
+)
 from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, HOME_Q_RAD, SimCell
 from ftcomp.sim.cell_config import CellConfig
 from ftcomp.sim.collect import record_with_truth
@@ -79,7 +88,9 @@ __all__ = [
     "ToolSpec",
     "build_mjcf",
     "c4_like_arm",
+    "dh_flange_pose",
     "dls_joint_velocity",
+    "fr3_arm",
     "paper_tool",
     "record_with_truth",
     "solve_pose",

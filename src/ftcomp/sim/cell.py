@@ -25,7 +25,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.errors import ParameterError, SimulationError
 from ftcomp.hardware.protocols import ClockName, PoseSample
-from ftcomp.sim.arm import ARM_JOINT_NAMES
 from ftcomp.sim.gripper import SURFACE_GEOMS, GripperAndSurfaces
 from ftcomp.sim.ik import DifferentialIK
 from ftcomp.sim.motion import HOME_Q_RAD, ArmMotion
@@ -59,8 +58,8 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         sensor_spec: the F/T sensor model. Default: the paper's sensor.
         seed: seeds the sensor noise; the same seed and calls give the same readings.
         control_period_s: control cycle [s] (1 ms); a whole multiple of the physics step.
-        q_start_rad: initial joint positions [rad], shape (6,); default: the arm's
-            ``home_q_rad`` (:data:`HOME_Q_RAD` for the C4-like arm).
+        q_start_rad: initial joint positions [rad], shape (N,) (the arm's N joints); default:
+            the arm's ``home_q_rad`` (:data:`HOME_Q_RAD` for the C4-like arm).
     """
 
     def __init__(
@@ -87,13 +86,17 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         self._period = control_period_s
         self._rate = 1.0 / control_period_s
 
-        joint_ids = [m.joint(name).id for name in ARM_JOINT_NAMES]
+        self._joint_names = self._config.arm.joint_names
+        n = self._n = len(self._joint_names)
+        joint_ids = [m.joint(name).id for name in self._joint_names]
         self._qpos_adr = np.array([m.jnt_qposadr[j] for j in joint_ids], dtype=np.intp)
         self._dof_adr = np.array([m.jnt_dofadr[j] for j in joint_ids], dtype=np.intp)
-        if np.any(self._dof_adr != np.arange(6)) or np.any(self._qpos_adr != np.arange(6)):
-            raise SimulationError("the arm joints must be MuJoCo's first six degrees of freedom")
-        self._qs = slice(int(self._qpos_adr[0]), int(self._qpos_adr[0]) + 6)
-        self._ds = slice(int(self._dof_adr[0]), int(self._dof_adr[0]) + 6)
+        if np.any(self._dof_adr != np.arange(n)) or np.any(self._qpos_adr != np.arange(n)):
+            raise SimulationError(
+                f"the arm's {n} joints must be MuJoCo's first {n} degrees of freedom"
+            )
+        self._qs = slice(int(self._qpos_adr[0]), int(self._qpos_adr[0]) + n)
+        self._ds = slice(int(self._dof_adr[0]), int(self._dof_adr[0]) + n)
         self._lower = m.jnt_range[joint_ids, 0].copy()
         self._upper = m.jnt_range[joint_ids, 1].copy()
         self._limits = (self._lower.tolist(), self._upper.tolist())
@@ -126,7 +129,7 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         )
         self._check_joints(q0, "q_start_rad")
         self._q_cmd = q0.copy()
-        self._qd_cmd = np.zeros(6)
+        self._qd_cmd = np.zeros(n)
         self._twist_world = np.zeros(6)
         self._twist_active = False
         self._dik = DifferentialIK(
@@ -178,18 +181,34 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         return self._R_world_base.copy()
 
     @property
+    def n_joints(self) -> int:
+        """The arm's number of joints, N: MuJoCo's degrees of freedom ``0 .. N-1``
+        (``data.qpos[:N]``, ``data.qvel[:N]``)."""
+        return self._n
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """MJCF names of the arm's joints, base to flange, N."""
+        return self._joint_names
+
+    @property
     def q_rad(self) -> NDArray[np.float64]:
-        """Measured joint positions [rad], shape (6,)."""
+        """Measured joint positions [rad], shape (N,)."""
         return np.array(self._data.qpos[self._qs])
 
     @property
+    def qd_rad_per_s(self) -> NDArray[np.float64]:
+        """Measured joint velocities [rad/s], shape (N,)."""
+        return np.array(self._data.qvel[self._ds])
+
+    @property
     def q_command_rad(self) -> NDArray[np.float64]:
-        """Commanded joint positions [rad], shape (6,)."""
+        """Commanded joint positions [rad], shape (N,)."""
         return self._q_cmd.copy()
 
     @property
     def joint_range_rad(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The joints' ranges ``(lower, upper)`` [rad], each shape (6,): the commanded joints
+        """The joints' ranges ``(lower, upper)`` [rad], each shape (N,): the commanded joints
         stop there."""
         return self._lower.copy(), self._upper.copy()
 
@@ -259,8 +278,8 @@ class SimCell(ArmMotion, GripperAndSurfaces):
 
     def wait_cycle(self) -> None:
         """Advance one control period: differential IK of the commanded twist, then physics."""
-        if self._twist_active:  # on floats: six joints, where numpy calls cost the most
-            qd = self._dik.joint_velocity(self._data, self._twist_world)[:6].tolist()
+        if self._twist_active:  # on floats: a few joints, where numpy calls cost the most
+            qd = self._dik.joint_velocity(self._data, self._twist_world)[: self._n].tolist()
             peak = max(map(abs, qd))
             if peak > _MAX_JOINT_SPEED:
                 qd = [v * (_MAX_JOINT_SPEED / peak) for v in qd]
@@ -276,13 +295,13 @@ class SimCell(ArmMotion, GripperAndSurfaces):
 
     # ----------------------------------------------------------------- physics and sensing
     def _check_joints(self, q: NDArray[np.float64], name: str) -> None:
-        if q.shape != (6,) or not np.isfinite(q).all():
-            raise ParameterError(f"{name} must be 6 finite joint angles [rad], got {q!r}")
+        if q.shape != (self._n,) or not np.isfinite(q).all():
+            raise ParameterError(f"{name} must be {self._n} finite joint angles [rad], got {q!r}")
         bad = np.flatnonzero((q < self._lower - 1e-9) | (q > self._upper + 1e-9))
         if bad.size:
             j = int(bad[0])
             raise ParameterError(
-                f"{name}: joint {ARM_JOINT_NAMES[j]}={math.degrees(q[j]):.2f} deg is outside "
+                f"{name}: joint {self._joint_names[j]}={math.degrees(q[j]):.2f} deg is outside "
                 f"[{math.degrees(self._lower[j]):.1f}, {math.degrees(self._upper[j]):.1f}] deg"
             )
 

@@ -104,7 +104,7 @@ class ArmMotion:
             if on_cycle is not None:
                 on_cycle(self)
         self._q_cmd = q1
-        self._qd_cmd = np.zeros(6)
+        self._qd_cmd = np.zeros(q1.shape[0])
 
     def move_pose(
         self,
@@ -180,7 +180,7 @@ class ArmMotion:
         span = self._upper - self._lower
         draw = self._ik_rng if rng is None else rng
         seeds = [self._q_cmd, np.array(self._config.arm.home_q_rad)]
-        seeds += [self._lower + span * draw.random(6) for _ in range(30)]
+        seeds += [self._lower + span * draw.random(span.shape[0]) for _ in range(30)]
         mujoco.mj_copyData(self._scratch, self._model, self._data)
         q = solve_pose(
             self._model,

@@ -5,13 +5,15 @@ mounted with ``R_world_base = Rx(U) @ Ry(V)`` (paper Eq. 1), so a tilt changes w
 in the base frame, exactly as a tilted mount does. The sensor frame is the site ``ft_site`` at the
 origin of the ``sensing_end`` body, z along the tool axis away from the flange.
 
-The arm is either the C4-like arm (:class:`~ftcomp.sim.arm.ArmSpec`) or an arm given by its DH
-table (:class:`~ftcomp.sim.arm.DHArmSpec`, the UR5e): then the body of link ``i`` is DH frame
-``i`` (its joint turns about ``z_{i-1}``, through frame ``i-1``'s origin), so MuJoCo's forward
-kinematics is the DH product and ``link6`` is the tool flange; the sensor sits on that flange at
+The arm is either the C4-like arm (:class:`~ftcomp.sim.arm.ArmSpec`) or an arm of N joints given
+by its DH table (:class:`~ftcomp.sim.arm.DHArmSpec`: the UR5e, standard DH; the FR3, modified):
+then the body of link ``i`` is DH frame ``i`` (standard: its joint turns about ``z_{i-1}``,
+through frame ``i-1``'s origin; modified: about its own ``z``, through its origin), so MuJoCo's
+forward kinematics is the DH product; the flange is ``linkN``, or a body ``flange`` in it placed
+by the arm's flange row (:func:`flange_body_name`), and the sensor sits on the flange at
 ``SceneConfig.p_flange_sensor_m`` / ``rotvec_flange_sensor_rad``.
 
-The arm comes first in the tree, so its joints are MuJoCo's degrees of freedom 0-5.
+The arm comes first in the tree, so its joints are MuJoCo's degrees of freedom 0 .. N-1.
 The subtree below the sensor is exactly ``sensing_end`` (+ ``gripper``); both are welded to their
 parent (no joints, no actuators), so MuJoCo's force/torque sensors at ``ft_site`` measure their
 weight plus whatever acts on them (contact, the grasp weld to a load).
@@ -29,13 +31,14 @@ from scipy.spatial.transform import Rotation
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 from ftcomp.frames import R_world_base_from_tilt
-from ftcomp.sim.arm import ARM_JOINT_NAMES, ArmModel, ArmSpec, DHArmSpec
+from ftcomp.sim.arm import ArmModel, ArmSpec, DHArmSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS, BookSpec, SpongeSpec, SurfaceKind, TableSpec
 from ftcomp.sim.tool import LoadSpec, ToolSpec
 
-__all__ = ["MAX_TILT_DEG", "NAMES", "SceneConfig", "build_mjcf"]
+__all__ = ["MAX_TILT_DEG", "NAMES", "SceneConfig", "build_mjcf", "flange_body_name"]
 
-#: MJCF names the cell relies on.
+#: MJCF names the cell relies on ("flange": a six-joint arm's without a flange row; any arm's:
+#: :func:`flange_body_name`).
 NAMES: Final = {
     "base": "base",
     "flange": "link6",
@@ -170,30 +173,74 @@ def _box_inertia(mass: float, half: np.ndarray) -> np.ndarray:
 _ARM_GEOM: Final = 'contype="0" conaffinity="0" rgba="0.85 0.85 0.9 1"'
 
 
+def flange_body_name(arm: ArmModel) -> str:
+    """The MJCF body of the arm's tool flange: ``linkN``, or ``flange`` with a flange row."""
+    if isinstance(arm, DHArmSpec) and arm.has_flange_row:
+        return "flange"
+    return f"link{arm.n_joints}"
+
+
 def _joint_xml(arm: ArmModel, i: int, axis: str, pos: str = "0 0 0") -> str:
     lo, hi = arm.joint_lower_rad[i], arm.joint_upper_rad[i]
     return (
-        f'<joint name="{ARM_JOINT_NAMES[i]}" pos="{pos}" axis="{axis}" range="{_f([lo, hi])}" '
+        f'<joint name="{arm.joint_names[i]}" pos="{pos}" axis="{axis}" range="{_f([lo, hi])}" '
         f'armature="{arm.armature_kgm2[i]:.12g}"/>'
     )
 
 
+def _inertial_xml(arm: DHArmSpec, i: int) -> str:
+    inertia = arm.link_inertia_kgm2[i]
+    if inertia.ndim == 1:
+        moments = f'diaginertia="{_f(inertia)}"'
+    else:  # MuJoCo's order: xx yy zz xy xz yz
+        moments = f'fullinertia="{_f([inertia[j, k] for j, k in _FULL_INERTIA_ORDER])}"'
+    return f"""<inertial pos="{_f(arm.link_com_m[i])}" mass="{arm.link_masses_kg[i]:.17g}"
+                    {moments}/>"""
+
+
+_FULL_INERTIA_ORDER: Final = ((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))
+
+
 def _dh_arm_xml(arm: DHArmSpec, tool_xml: str) -> str:
-    """Link ``i``'s body at DH frame ``i``: placed ``Tz(d) Tx(a) Rx(alpha)`` in frame ``i-1``
-    (at q = 0), its joint about ``z_{i-1}`` through frame ``i-1``'s origin, both given in frame
-    ``i``: the axis ``Rx(alpha)^T e_z`` and the point ``-Rx(alpha)^T (a, 0, d)``."""
+    """Link ``i``'s body at DH frame ``i``, placed in frame ``i-1`` as its row puts it at q = 0.
+
+    Standard: at ``Tz(d) Tx(a) Rx(alpha)``, its joint about ``z_{i-1}`` through frame ``i-1``'s
+    origin, both given in frame ``i``: the axis ``Rx(alpha)^T e_z`` and the point
+    ``-Rx(alpha)^T (a, 0, d)``. Modified: at ``Rx(alpha) Tx(a) Tz(d)``, its joint about its own
+    z through its origin. A flange row adds a body ``flange`` in the last link, the tool in it.
+    """
     xml = tool_xml
-    for i in reversed(range(6)):
+    if arm.has_flange_row:
+        T = arm.flange_transform()
+        quat = _wxyz(Rotation.from_matrix(T[:3, :3]))
+        xml = f"""
+        <body name="flange" pos="{_f(T[:3, 3])}" quat="{quat}">{xml}
+        </body>"""
+    for i in reversed(range(arm.n_joints)):
         a, d, alpha = arm.dh_a_m[i], arm.dh_d_m[i], arm.dh_alpha_rad[i]
         ca, sa = math.cos(alpha), math.sin(alpha)
-        joint_pos = np.array([-a, -sa * d, -ca * d])
         quat = _wxyz(Rotation.from_rotvec([alpha, 0.0, 0.0]))
-        xml = f"""
+        if arm.convention == "standard":
+            joint_pos = np.array([-a, -sa * d, -ca * d])
+            xml = f"""
         <body name="link{i + 1}" pos="{_f([a, 0.0, d])}" quat="{quat}">
           {_joint_xml(arm, i, _f([0.0, sa, ca]), _f(joint_pos))}
-          <inertial pos="{_f(arm.link_com_m[i])}" mass="{arm.link_masses_kg[i]:.17g}"
-                    diaginertia="{_f(arm.link_inertia_kgm2[i])}"/>
+          {_inertial_xml(arm, i)}
           <geom type="capsule" fromto="{_f(joint_pos)} 0 0 0" size="0.045" {_ARM_GEOM}/>{xml}
+        </body>"""
+            continue
+        # The parent frame's origin, seen from this one: -Rx(alpha)^T (a, -sa d, ca d).
+        parent = _f([-a, 0.0, -d])
+        geom = (
+            f'<geom type="capsule" fromto="{parent} 0 0 0" size="0.045" {_ARM_GEOM}/>'
+            if math.hypot(a, d) > 1e-6
+            else f'<geom type="sphere" size="0.045" {_ARM_GEOM}/>'
+        )
+        xml = f"""
+        <body name="link{i + 1}" pos="{_f([a, -sa * d, ca * d])}" quat="{quat}">
+          {_joint_xml(arm, i, "0 0 1")}
+          {_inertial_xml(arm, i)}
+          {geom}{xml}
         </body>"""
     return xml
 
@@ -375,7 +422,7 @@ def build_mjcf(config: SceneConfig) -> str:
     actuators = "\n".join(
         f'    <position name="{name}_servo" joint="{name}" kp="{arm.kp[i]:.12g}" '
         f'kv="{arm.kv[i]:.12g}"/>'
-        for i, name in enumerate(ARM_JOINT_NAMES)
+        for i, name in enumerate(arm.joint_names)
     )
     equality = ""
     if config.load is not None:
