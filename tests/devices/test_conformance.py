@@ -13,7 +13,7 @@ For each pair the registry (:mod:`ftcomp.hardware.devices`) declares, against ``
   0.05 N at the end, no safety stop);
 - each fault a face declares, injected by the twin, ends ``run`` as the declaration says
   (its message, exit 1, "the robot was stopped", within ``seen_within_s`` of the fault), or
-  leaves it running to its end; the log whole and the timing reported either way.
+  leaves it running to its end; the log whole either way.
 
 A device added to the registry (also from a module named in ``FTCOMP_DEVICES``) is picked up
 here with no change to this file; a pair whose client library is not installed is skipped
@@ -272,9 +272,6 @@ def test_each_declared_fault_ends_run_as_declared_with_a_valid_log(
     _, rows = _rows(log)
     t_last = float(rows[-1][0])
     said = done.stdout + done.stderr + twin.output()
-    # the run reports its timing, and saves the block beside its log
-    assert "timing: " in done.stdout, said
-    assert json.loads((tmp_path / "run.timing.json").read_text())["cycles"] > 0
     if fault.run_says is None:  # within the limits: no fault, the run goes on to its end
         assert done.returncode == 0, said
         assert SECONDS - 0.1 <= t_last <= SECONDS + 0.1, t_last

@@ -1,0 +1,89 @@
+"""A robot and a sensor added from a module of their own, with no other file changed: the
+command line, the twin and the conformance suite pick them up (``FTCOMP_DEVICES``).
+
+The module (``toy_devices.py`` beside this file, copied to a temporary folder under another
+name so that nothing imports it by accident) declares a toy arm and a toy F/T sensor, each a
+live backend and a twin face. The conformance suite is then run on the toy pair as on any
+other: record at designed poses, calibrate, stream, place a load, the faces' faults.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("mujoco")
+
+HERE = Path(__file__).resolve().parent
+MODULE = "ftcomp_toy_devices_under_test"
+
+
+@pytest.fixture(scope="module")
+def env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
+    folder = tmp_path_factory.mktemp("toy")
+    shutil.copy(HERE / "toy_devices.py", folder / f"{MODULE}.py")
+    env = dict(os.environ)
+    env["FTCOMP_DEVICES"] = MODULE
+    env["PYTHONPATH"] = os.pathsep.join(
+        filter(None, [str(folder), str(HERE.parent), env.get("PYTHONPATH", "")])
+    )
+    return env
+
+
+def _ftcomp(env: dict[str, str], *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "ftcomp", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=60,
+        check=False,
+    )
+
+
+def test_the_command_line_offers_the_new_devices(env: dict[str, str]) -> None:
+    twin = _ftcomp(env, "twin", "--help")
+    assert twin.returncode == 0, twin.stderr
+    help_text = " ".join(twin.stdout.split())
+    assert "toybot, a toy arm" in help_text and "toyft, a toy F/T sensor" in help_text
+    assert "toybot-silent (toybot: no more state lines)" in help_text
+    record = _ftcomp(env, "record", "--help")
+    assert "toybot://HOST" in record.stdout and "toyft://HOST" in record.stdout
+    # without the module named, nothing of it is there
+    plain = {k: v for k, v in env.items() if k != "FTCOMP_DEVICES"}
+    assert "toybot" not in _ftcomp(plain, "twin", "--help").stdout
+    # a fault of a face not served is refused in one line
+    refused = _ftcomp(
+        env, "twin", "--robot-host", "127.0.0.5", "--sensor-host", "127.0.0.6",
+        "--fault", "toybot-silent", "--seconds", "1",
+    )  # fmt: skip
+    assert refused.returncode == 2 and refused.stderr.count("\n") == 1, refused.stderr
+    assert "'toybot-silent' is not a fault of ur5e with netft" in refused.stderr
+
+
+def test_the_conformance_suite_runs_every_pair_and_the_toy_pair_passes(
+    env: dict[str, str],
+) -> None:
+    suite = str(HERE / "test_conformance.py")
+    collected = subprocess.run(
+        [sys.executable, "-m", "pytest", suite, "--collect-only", "-q", "-p", "no:cacheprovider"],
+        capture_output=True, text=True, env=env, timeout=120, check=False, cwd=HERE.parent.parent,
+    )  # fmt: skip
+    ids = set(re.findall(r"\[([^\]]+)\]", collected.stdout))
+    for pair in ("ur5e-netft", "ur5e-toyft", "toybot-netft", "toybot-toyft"):
+        assert any(i.startswith(pair) for i in ids), (pair, collected.stdout[-2000:])
+    assert "toybot-toyft-toyft-silent" in ids and "toybot-netft-rdt-loss" in ids
+    run = subprocess.run(
+        [sys.executable, "-m", "pytest", suite, "-q", "-p", "no:cacheprovider", "-k",
+         "toybot-toyft"],
+        capture_output=True, text=True, env=env, timeout=600, check=False, cwd=HERE.parent.parent,
+    )  # fmt: skip
+    assert run.returncode == 0, run.stdout[-6000:] + run.stderr[-2000:]
+    # record and calibrate, stream, two placements, the two faces' faults
+    assert re.search(r"\b6 passed\b", run.stdout), run.stdout[-2000:]
