@@ -35,7 +35,7 @@ def test_sim_uri_builds_the_cell_it_describes_and_the_sensor_attaches_to_it() ->
     [
         ("sim://?tilt=1", "sim://", "unknown option 'tilt' for sim://; valid: tilt_deg"),
         ("sim://?tilt_deg=1", "sim://", "option tilt_deg='1': expected 2 comma-separated"),
-        ("sim://?load_kg=9", "sim://", "load_kg must be in (0, 4.0]"),
+        ("sim://?load_kg=9", "sim://", "load_kg must be in (0, 4] kg"),
         ("sim://?surface=sand", "sim://", "expected one of none, sponge, book"),
         ("sim://?grasp=1", "sim://", "grasp needs a load"),
         ("sim://?seed=-1", "sim://", "seed must be >= 0"),

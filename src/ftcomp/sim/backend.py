@@ -93,7 +93,7 @@ def cell_config_from_uri(uri: Uri) -> CellConfig:
             realistic_drift=realistic,
         )
     except ParameterError as error:
-        raise ParameterError(f"{uri.text!r}: {error}") from None
+        raise ParameterError(f"{uri.text!r}: {error}", field=error.fields) from None
 
 
 def sensor_spec_from_uri(uri: Uri) -> SensorSpec:

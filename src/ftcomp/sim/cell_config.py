@@ -2,10 +2,12 @@
 
 The ``sim://`` backend parses its URI into a :class:`CellConfig`
 (:func:`ftcomp.sim.backend.cell_config_from_uri`), the twin and ``ftcomp sim collect`` build one
-from their options; :meth:`CellConfig.open_cell` builds the cell. Each range a user can give is
-defined here once (:data:`MAX_LOAD_KG`, :data:`MAX_CLEARANCE_MM`, ...), and checked once, in
-:meth:`CellConfig.__post_init__`; a message names the field, not a URI option or a flag, and the
-caller adds where the value came from.
+from their options; :meth:`CellConfig.open_cell` builds the cell. Each field's range, unit and help
+is declared once, on the field (:func:`ftcomp.config_fields.param`, from the constants
+:data:`MAX_LOAD_KG`, :data:`MAX_CLEARANCE_MM`, ...), and checked in
+:meth:`CellConfig.__post_init__`; a :class:`~ftcomp.errors.ParameterError` names the field (its
+``fields``), not a URI option or a flag, and the caller adds where the value came from (the CLI
+builds its options from the same declarations: :func:`ftcomp.config_fields.spec_of`).
 
 Units are those a user types (degrees, millimetres, percent, per minute), named in each field;
 :meth:`CellConfig.scene` and :meth:`CellConfig.sensor_spec` turn them into the SI records the
@@ -21,10 +23,11 @@ from typing import Final
 
 import numpy as np
 
+from ftcomp.config_fields import check_fields, param
 from ftcomp.errors import ParameterError
 from ftcomp.sim.arm import ArmModel, c4_like_arm
 from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, SimCell
-from ftcomp.sim.scene import MAX_TILT_DEG, SceneConfig
+from ftcomp.sim.scene import MAX_SENSOR_OFFSET_M, MAX_TILT_DEG, SceneConfig
 from ftcomp.sim.sensor import SensorSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS, SurfaceKind
 from ftcomp.sim.tool import LoadSpec
@@ -34,6 +37,7 @@ __all__ = [
     "MAX_GAIN_ERROR_PERCENT",
     "MAX_LOAD_KG",
     "MAX_REALISTIC_DRIFT",
+    "MAX_SENSOR_OFFSET_M",
     "MAX_TILT_DEG",
     "CellConfig",
 ]
@@ -55,16 +59,6 @@ _START_MOVE_S: Final = 0.5
 _LOWER_MOVE_S: Final = 0.3
 #: A load is grasped at least this far above the surface [m] (then lowered to the clearance).
 _GRASP_CLEARANCE_M: Final = 0.02
-
-
-def _numbers(name: str, value: object, count: int) -> tuple[float, ...]:
-    try:
-        numbers = tuple(float(v) for v in value)  # type: ignore[attr-defined]
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be {count} numbers, got {value!r}") from None
-    if len(numbers) != count or not all(map(math.isfinite, numbers)):
-        raise ParameterError(f"{name} must be {count} finite numbers, got {value!r}")
-    return numbers
 
 
 @dataclass(frozen=True)
@@ -106,74 +100,80 @@ class CellConfig:
     """
 
     arm: ArmModel = field(default_factory=c4_like_arm)
-    tilt_deg: tuple[float, float] = (0.0, 0.0)
+    tilt_deg: tuple[float, float] = param(
+        (0.0, 0.0),
+        length=2,
+        gt=-MAX_TILT_DEG,
+        lt=MAX_TILT_DEG,
+        unit="deg",
+        help="the base's mounting tilt (U, V), paper Eq. 1",
+    )
     gripper: bool = True
-    load_kg: float | None = None
+    load_kg: float | None = param(
+        None, gt=0.0, le=MAX_LOAD_KG, unit="kg", optional=True, help="a graspable load's mass"
+    )
     grasp: bool = False
-    surface: SurfaceKind = "none"
-    clearance_mm: float | None = None
-    p_flange_sensor_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    rotvec_flange_sensor_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    seed: int = 0
-    gain_error_percent: float | tuple[float, ...] = 0.0
-    drift_N_per_min: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    drift_Nm_per_min: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    drift_walk_N: float = 0.0
-    realistic_drift: float = 0.0
+    surface: SurfaceKind = param("none", choices=SURFACE_KINDS, help="what lies on the table")
+    clearance_mm: float | None = param(
+        None,
+        ge=0.0,
+        le=MAX_CLEARANCE_MM,
+        unit="mm",
+        optional=True,
+        help="start holding the grasped load this far above the surface",
+    )
+    p_flange_sensor_m: tuple[float, float, float] = param(
+        (0.0, 0.0, 0.0),
+        length=3,
+        ge=-MAX_SENSOR_OFFSET_M,
+        le=MAX_SENSOR_OFFSET_M,
+        unit="m",
+        help="the sensor frame's origin in the flange frame",
+    )
+    rotvec_flange_sensor_rad: tuple[float, float, float] = param(
+        (0.0, 0.0, 0.0),
+        length=3,
+        ge=-math.pi,
+        le=math.pi,
+        unit="rad",
+        help="the sensor frame's axes in the flange frame, a rotation vector",
+    )
+    seed: int = param(0, integer=True, ge=0, help="the sensor noise's seed")
+    gain_error_percent: float | tuple[float, ...] = param(
+        0.0,
+        length=6,
+        gt=-MAX_GAIN_ERROR_PERCENT,
+        lt=MAX_GAIN_ERROR_PERCENT,
+        unit="%",
+        help="the sensor's gain error per axis",
+    )
+    drift_N_per_min: tuple[float, float, float] = param(
+        (0.0, 0.0, 0.0), length=3, unit="N/min", help="the force bias's drift rate, x y z"
+    )
+    drift_Nm_per_min: tuple[float, float, float] = param(
+        (0.0, 0.0, 0.0), length=3, unit="N*m/min", help="the torque bias's drift rate, x y z"
+    )
+    drift_walk_N: float = param(
+        0.0, ge=0.0, unit="N", help="the force bias's random walk, its std after one minute"
+    )
+    realistic_drift: float = param(
+        0.0,
+        ge=0.0,
+        le=MAX_REALISTIC_DRIFT,
+        help="a real sensor's drift (wander and warm-up) times this, 0: none",
+    )
 
     def __post_init__(self) -> None:
-        tilt = _numbers("tilt_deg", self.tilt_deg, 2)
-        if any(abs(t) >= MAX_TILT_DEG for t in tilt):
-            raise ParameterError(f"tilt_deg must be within +-{MAX_TILT_DEG:g} deg, got {tilt}")
-        object.__setattr__(self, "tilt_deg", tilt)
-        if self.load_kg is not None and not (
-            math.isfinite(self.load_kg) and 0.0 < self.load_kg <= MAX_LOAD_KG
-        ):
-            raise ParameterError(f"load_kg must be in (0, {MAX_LOAD_KG}] kg, got {self.load_kg}")
-        if self.load_kg is not None and not self.gripper:
-            raise ParameterError("load_kg needs the gripper (gripper=True)")
-        if self.grasp and self.load_kg is None:
-            raise ParameterError("grasp needs a load (load_kg)")
-        if self.surface not in SURFACE_KINDS:
-            raise ParameterError(
-                f"surface: unknown {self.surface!r}; known: {', '.join(SURFACE_KINDS)}"
-            )
-        if self.clearance_mm is not None:
-            if not (
-                math.isfinite(self.clearance_mm) and 0.0 <= self.clearance_mm <= MAX_CLEARANCE_MM
-            ):
-                raise ParameterError(
-                    f"clearance_mm must be in [0, {MAX_CLEARANCE_MM:g}] mm, got {self.clearance_mm}"
-                )
-            if not self.grasp or self.surface == "none":
-                raise ParameterError("clearance_mm needs grasp and a surface")
-        for name in ("p_flange_sensor_m", "rotvec_flange_sensor_rad"):
-            object.__setattr__(self, name, _numbers(name, getattr(self, name), 3))
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ParameterError(f"seed must be >= 0 (a whole number), got {self.seed!r}")
         gain = self.gain_error_percent
-        gain6 = (
-            _numbers("gain_error_percent", gain, 6)
-            if isinstance(gain, tuple | list | np.ndarray)
-            else _numbers("gain_error_percent", (gain,), 1) * 6
-        )
-        if any(abs(g) >= MAX_GAIN_ERROR_PERCENT for g in gain6):
-            raise ParameterError(
-                f"gain_error_percent must be within +-{MAX_GAIN_ERROR_PERCENT:g} %, got {gain}"
-            )
-        object.__setattr__(self, "gain_error_percent", gain6)
-        for name in ("drift_N_per_min", "drift_Nm_per_min"):
-            object.__setattr__(self, name, _numbers(name, getattr(self, name), 3))
-        if not (math.isfinite(self.drift_walk_N) and self.drift_walk_N >= 0.0):
-            raise ParameterError(f"drift_walk_N must be >= 0, got {self.drift_walk_N}")
-        if not (
-            math.isfinite(self.realistic_drift)
-            and 0.0 <= self.realistic_drift <= MAX_REALISTIC_DRIFT
-        ):
-            raise ParameterError(
-                f"realistic_drift must be in 0 .. {MAX_REALISTIC_DRIFT:g}, got "
-                f"{self.realistic_drift}"
-            )
+        if isinstance(gain, int | float) and not isinstance(gain, bool):
+            object.__setattr__(self, "gain_error_percent", (gain,) * 6)  # one for every axis
+        check_fields(self)
+        if self.load_kg is not None and not self.gripper:
+            raise ParameterError("load_kg needs the gripper (gripper=True)", field="load_kg")
+        if self.grasp and self.load_kg is None:
+            raise ParameterError("grasp needs a load (load_kg)", field="grasp")
+        if self.clearance_mm is not None and (not self.grasp or self.surface == "none"):
+            raise ParameterError("clearance_mm needs grasp and a surface", field="clearance_mm")
         self.scene()  # the scene's own checks (the sensor offset needs a DH arm, ...) now
 
     @property

@@ -35,7 +35,14 @@ from ftcomp.sim.arm import ArmModel, ArmSpec, DHArmSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS, BookSpec, SpongeSpec, SurfaceKind, TableSpec
 from ftcomp.sim.tool import LoadSpec, ToolSpec
 
-__all__ = ["MAX_TILT_DEG", "NAMES", "SceneConfig", "build_mjcf", "flange_body_name"]
+__all__ = [
+    "MAX_SENSOR_OFFSET_M",
+    "MAX_TILT_DEG",
+    "NAMES",
+    "SceneConfig",
+    "build_mjcf",
+    "flange_body_name",
+]
 
 #: MJCF names the cell relies on ("flange": a six-joint arm's without a flange row; any arm's:
 #: :func:`flange_body_name`).
@@ -59,6 +66,8 @@ NAMES: Final = {
 
 #: The base's mounting tilt must be below this about either axis [deg].
 MAX_TILT_DEG: Final = 30.0
+#: The sensor frame's origin lies within this of the flange's on every axis [m].
+MAX_SENSOR_OFFSET_M: Final = 0.5
 #: Mass [kg] and half-height [m] of the sensor's fixed housing (above the sensing end).
 _HOUSING_MASS_KG: Final = 0.25
 _HOUSING_HALF_HEIGHT_M: Final = 0.015
@@ -117,8 +126,10 @@ class SceneConfig:
                 raise ParameterError(f"SceneConfig.{name} must be 3 finite numbers")
             if any(value) and not isinstance(self.arm, DHArmSpec):
                 raise ParameterError(f"SceneConfig.{name} needs an arm given by a DH table")
-        if max(map(abs, self.p_flange_sensor_m)) > 0.5:
-            raise ParameterError("SceneConfig.p_flange_sensor_m must be within 0.5 m per axis")
+        if max(map(abs, self.p_flange_sensor_m)) > MAX_SENSOR_OFFSET_M:
+            raise ParameterError(
+                f"SceneConfig.p_flange_sensor_m must be within {MAX_SENSOR_OFFSET_M:g} m per axis"
+            )
         if math.hypot(*self.rotvec_flange_sensor_rad) > math.pi:
             raise ParameterError("SceneConfig.rotvec_flange_sensor_rad must have norm <= pi")
         for name in ("tilt_U_rad", "tilt_V_rad"):
