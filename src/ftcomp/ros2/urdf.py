@@ -28,11 +28,11 @@ from ftcomp.errors import InputFileError
 from ftcomp.extras import require_extra
 
 if TYPE_CHECKING:
-    from pytransform3d.urdf import Joint
+    from pytransform3d.urdf import Joint, Link
 
     from ftcomp.ros2.bag import JointStates
 
-__all__ = ["UrdfChain"]
+__all__ = ["UrdfChain", "read_urdf"]
 
 _MOVABLE = ("revolute", "continuous", "prismatic")
 #: A movable joint prepared for one configuration: the fixed rotation and translation before
@@ -49,11 +49,14 @@ _Step: TypeAlias = tuple[
 _I3 = np.eye(3)
 
 
-def _read(path: str | Path) -> tuple[set[str], list[Joint]]:
-    """The link names and joints of a URDF file.
+def read_urdf(path: str | Path) -> tuple[list[Link], list[Joint]]:
+    """The links and joints of a URDF file, as pytransform3d parses them (a link's inertial:
+    ``mass``, ``inertial_frame`` and ``inertia``; a joint's ``child2parent``, ``joint_axis``,
+    ``limits`` and ``joint_type``).
 
     Raises:
         MissingExtraError: pytransform3d (the extra ``urdf``) is not installed.
+        InputFileError: unreadable, a xacro file, or not a valid URDF.
     """
     require_extra("urdf", "reading a URDF")
     from pytransform3d.urdf import parse_urdf
@@ -73,7 +76,7 @@ def _read(path: str | Path) -> tuple[set[str], list[Joint]]:
         _name, links, joints = parse_urdf(text, strict_check=False)
     except Exception as exc:  # UrdfException, and the XML parser's errors
         raise InputFileError(f"{path}: not a valid URDF ({exc})") from None
-    return {str(link.name) for link in links}, list(joints)
+    return list(links), list(joints)
 
 
 def _is_xacro(path: str | Path, text: str) -> bool:
@@ -97,7 +100,8 @@ class UrdfChain:
 
     def __init__(self, path: str | Path, base: str | None = None, sensor: str | None = None):
         self.source = str(path)
-        link_names, joints = _read(path)
+        links, joints = read_urdf(path)
+        link_names = {str(link.name) for link in links}
         self._parent_joint: dict[str, Joint] = {str(j.child): j for j in joints}
         if base is None:
             roots = sorted(n for n in link_names if n not in self._parent_joint)

@@ -1,5 +1,6 @@
 """The simulated robot cell on MuJoCo: an arm (the six-axis C4-like arm, or any serial arm given
-by its DH table: :func:`ur5e_arm`, the seven-joint :func:`fr3_arm`), a wrist F/T sensor, a
+by its DH table: :func:`ur5e_arm`, the seven-joint :func:`fr3_arm`; or from a URDF:
+:func:`urdf_arm`), a wrist F/T sensor, a
 gripper, loads, and a table with a sponge pad or a book; :class:`CellConfig` describes one.
 
 :class:`SimCell` implements :class:`ftcomp.hardware.protocols.Robot`; ``cell.sensor`` implements
@@ -48,8 +49,10 @@ from ftcomp.sim.arm import (
     ARM_JOINT_NAMES,
     ARMS,
     ArmSpec,
+    ChainArmSpec,
     DHArmSpec,
     c4_like_arm,
+    chain_flange_pose,
     dh_flange_pose,
     fr3_arm,
     ur5e_arm,
@@ -63,6 +66,7 @@ from ftcomp.sim.scene import NAMES, SceneConfig, build_mjcf
 from ftcomp.sim.sensor import SensorSpec, SimWrenchSensor
 from ftcomp.sim.surfaces import SURFACE_KINDS, BookSpec, SpongeSpec, SurfaceKind, TableSpec
 from ftcomp.sim.tool import LoadSpec, ToolSpec, paper_tool, table4_loads
+from ftcomp.sim.urdf_arm import urdf_arm
 
 __all__ = [
     "ARMS",
@@ -74,6 +78,7 @@ __all__ = [
     "ArmSpec",
     "BookSpec",
     "CellConfig",
+    "ChainArmSpec",
     "DHArmSpec",
     "DifferentialIK",
     "LoadSpec",
@@ -88,6 +93,7 @@ __all__ = [
     "ToolSpec",
     "build_mjcf",
     "c4_like_arm",
+    "chain_flange_pose",
     "dh_flange_pose",
     "dls_joint_velocity",
     "fr3_arm",
@@ -96,4 +102,5 @@ __all__ = [
     "solve_pose",
     "table4_loads",
     "ur5e_arm",
+    "urdf_arm",
 ]

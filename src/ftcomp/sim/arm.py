@@ -51,9 +51,11 @@ __all__ = [
     "UR5E_HOME_Q_RAD",
     "ArmModel",
     "ArmSpec",
+    "ChainArmSpec",
     "DHArmSpec",
     "DHConvention",
     "c4_like_arm",
+    "chain_flange_pose",
     "dh_flange_pose",
     "fr3_arm",
     "joint_names",
@@ -184,7 +186,7 @@ _PER_JOINT: Final = (
 )
 
 
-def _freeze_and_check_joints(arm: ArmSpec | DHArmSpec, n_joints: int) -> None:
+def _freeze_and_check_joints(arm: ArmSpec | DHArmSpec | ChainArmSpec, n_joints: int) -> None:
     """Freeze an arm's per-joint fields and check their ranges (either arm's __post_init__)."""
     for field_name in _PER_JOINT:
         freeze_field(arm, field_name, (n_joints,), finite=True)
@@ -325,8 +327,125 @@ class DHArmSpec:
         )
 
 
+@dataclass(frozen=True)
+class ChainArmSpec:
+    """An arm of ``N`` revolute joints as its joint frames: any serial chain, e.g. a URDF's
+    (:func:`ftcomp.sim.urdf_arm.urdf_arm`).
+
+    Link ``i``'s frame is joint ``i``'s frame (as in a URDF): placed in link ``i-1``'s frame
+    (link 0: the base) at ``p_parent_joint_m[i]``, ``R_parent_joint[i]`` when the joint is at
+    zero, turning link ``i`` about ``joint_axis[i]`` (a unit vector in its own frame) through
+    its origin. The MuJoCo body of link ``i`` is that frame; the flange sits in link N's frame
+    at ``p_link_flange_m``, ``R_link_flange``.
+
+    Attributes:
+        name: the arm's name.
+        p_parent_joint_m: each joint frame's origin in its parent link's frame [m], (N, 3).
+        R_parent_joint: each joint frame's axes in its parent link's frame, (N, 3, 3).
+        joint_axis: each joint's axis in its own frame, (N, 3) (normalised here).
+        link_masses_kg: masses of links 1..N [kg], (N,).
+        link_com_m: each link's centre of mass in its frame [m], (N, 3).
+        link_inertia_kgm2: each link's inertia tensor about its centre of mass, in its frame's
+            axes [kg*m^2], (N, 3, 3).
+        joint_lower_rad, joint_upper_rad, kp, kv, armature_kgm2, home_q_rad: as
+            :class:`DHArmSpec`'s, (N,).
+        p_link_flange_m: the flange's origin in link N's frame [m], (3,).
+        R_link_flange: the flange's axes in link N's frame, (3, 3).
+    """
+
+    name: str
+    p_parent_joint_m: NDArray[np.float64]
+    R_parent_joint: NDArray[np.float64]
+    joint_axis: NDArray[np.float64]
+    link_masses_kg: NDArray[np.float64]
+    link_com_m: NDArray[np.float64]
+    link_inertia_kgm2: NDArray[np.float64]
+    joint_lower_rad: NDArray[np.float64]
+    joint_upper_rad: NDArray[np.float64]
+    kp: NDArray[np.float64]
+    kv: NDArray[np.float64]
+    armature_kgm2: NDArray[np.float64]
+    home_q_rad: NDArray[np.float64]
+    p_link_flange_m: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    R_link_flange: NDArray[np.float64] = field(default_factory=lambda: np.eye(3))
+
+    def __post_init__(self) -> None:
+        if not self.name:
+            raise ParameterError("ChainArmSpec.name must not be empty")
+        n = int(np.shape(self.p_parent_joint_m)[0]) if np.ndim(self.p_parent_joint_m) else 0
+        if n < 1:
+            raise ParameterError("ChainArmSpec needs at least one joint")
+        freeze_field(self, "p_parent_joint_m", (n, 3), finite=True)
+        freeze_field(self, "R_parent_joint", (n, 3, 3), finite=True)
+        axis = np.array(self.joint_axis, dtype=float)
+        norm = np.linalg.norm(axis, axis=-1, keepdims=True) if axis.shape == (n, 3) else None
+        if norm is None or not np.all(norm > 1e-9):
+            raise ParameterError("ChainArmSpec.joint_axis must be N non-zero vectors, (N, 3)")
+        object.__setattr__(self, "joint_axis", axis / norm)
+        freeze_field(self, "joint_axis", (n, 3), finite=True)
+        _freeze_and_check_joints(self, n)
+        freeze_field(self, "link_com_m", (n, 3), finite=True)
+        freeze_field(self, "link_inertia_kgm2", (n, 3, 3), finite=True)
+        freeze_field(self, "p_link_flange_m", (3,), finite=True)
+        freeze_field(self, "R_link_flange", (3, 3), finite=True)
+        for name, R in (
+            ("R_parent_joint", self.R_parent_joint),
+            ("R_link_flange", self.R_link_flange),
+        ):
+            R3 = R.reshape(-1, 3, 3)
+            if not np.allclose(R3 @ np.swapaxes(R3, 1, 2), np.eye(3), atol=1e-9) or np.any(
+                np.linalg.det(R3) < 0.0
+            ):
+                raise ParameterError(f"ChainArmSpec.{name} must be rotation matrices")
+        inertia = self.link_inertia_kgm2
+        if not np.allclose(inertia, np.swapaxes(inertia, 1, 2), rtol=0.0, atol=1e-15) or np.any(
+            np.linalg.eigvalsh(inertia) <= 0.0
+        ):
+            raise ParameterError(
+                "ChainArmSpec.link_inertia_kgm2 tensors must be symmetric and positive definite"
+            )
+
+    @property
+    def n_joints(self) -> int:
+        """The number of joints, N."""
+        return int(self.p_parent_joint_m.shape[0])
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """MJCF names of the joints, base to flange."""
+        return joint_names(self.n_joints)
+
+    @property
+    def has_flange_offset(self) -> bool:
+        """Whether the flange sits off link N's frame."""
+        return bool(np.any(self.p_link_flange_m) or np.any(self.R_link_flange != np.eye(3)))
+
+
 #: Any arm the cell can carry.
-ArmModel = ArmSpec | DHArmSpec
+ArmModel = ArmSpec | DHArmSpec | ChainArmSpec
+
+
+def chain_flange_pose(
+    arm: ChainArmSpec, q_rad: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Forward kinematics of a :class:`ChainArmSpec`: ``(p_base_flange [m] (3,),
+    R_base_flange (3, 3))``, each joint's fixed placement, then its turn (Rodrigues).
+
+    Raises:
+        ParameterError: ``q_rad`` is not N finite joint angles.
+    """
+    q = np.asarray(q_rad, dtype=float)
+    n = arm.n_joints
+    if q.shape != (n,) or not np.isfinite(q).all():
+        raise ParameterError(f"q_rad must be {n} finite joint angles [rad], got {q_rad!r}")
+    p, R = np.zeros(3), np.eye(3)
+    for p_i, R_i, axis, angle in zip(
+        arm.p_parent_joint_m, arm.R_parent_joint, arm.joint_axis, q, strict=True
+    ):
+        K = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+        turn = np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
+        p, R = p + R @ p_i, R @ R_i @ turn
+    return p + R @ arm.p_link_flange_m, R @ arm.R_link_flange
 
 
 def dh_flange_pose(

@@ -11,7 +11,9 @@ then the body of link ``i`` is DH frame ``i`` (standard: its joint turns about `
 through frame ``i-1``'s origin; modified: about its own ``z``, through its origin), so MuJoCo's
 forward kinematics is the DH product; the flange is ``linkN``, or a body ``flange`` in it placed
 by the arm's flange row (:func:`flange_body_name`), and the sensor sits on the flange at
-``SceneConfig.p_flange_sensor_m`` / ``rotvec_flange_sensor_rad``.
+``SceneConfig.p_flange_sensor_m`` / ``rotvec_flange_sensor_rad``. An arm given by its joint
+frames (:class:`~ftcomp.sim.arm.ChainArmSpec`, e.g. read from a URDF) is built the same way:
+link ``i``'s body at joint ``i``'s frame, turning about its axis through its origin.
 
 The arm comes first in the tree, so its joints are MuJoCo's degrees of freedom 0 .. N-1.
 The subtree below the sensor is exactly ``sensing_end`` (+ ``gripper``); both are welded to their
@@ -31,7 +33,7 @@ from scipy.spatial.transform import Rotation
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 from ftcomp.frames import R_world_base_from_tilt
-from ftcomp.sim.arm import ArmModel, ArmSpec, DHArmSpec
+from ftcomp.sim.arm import ArmModel, ArmSpec, ChainArmSpec, DHArmSpec
 from ftcomp.sim.surfaces import SURFACE_KINDS, BookSpec, SpongeSpec, SurfaceKind, TableSpec
 from ftcomp.sim.tool import LoadSpec, ToolSpec
 
@@ -89,12 +91,13 @@ class SceneConfig:
         load: the graspable load in the scene, or None.
         surface: ``"none"``, ``"sponge"`` or ``"book"`` on the table (the table is always there).
         arm, tool, table, sponge, book: the parts' specifications (``arm``: the C4-like
-            :class:`~ftcomp.sim.arm.ArmSpec` or a :class:`~ftcomp.sim.arm.DHArmSpec`).
-        p_flange_sensor_m: with a DH arm, the sensor frame's origin in the flange frame (DH
-            frame 6) [m], (3,); the sensor's housing lies behind it. Zero with the C4-like arm
-            (its sensor sits on its flange, z along the flange's x).
-        rotvec_flange_sensor_rad: with a DH arm, the sensor frame's axes in the flange frame,
-            a rotation vector [rad], (3,).
+            :class:`~ftcomp.sim.arm.ArmSpec`, a :class:`~ftcomp.sim.arm.DHArmSpec` or a
+            :class:`~ftcomp.sim.arm.ChainArmSpec`).
+        p_flange_sensor_m: with a DH or chain arm, the sensor frame's origin in the flange frame
+            [m], (3,); the sensor's housing lies behind it. Zero with the C4-like arm (its
+            sensor sits on its flange, z along the flange's x).
+        rotvec_flange_sensor_rad: with a DH or chain arm, the sensor frame's axes in the flange
+            frame, a rotation vector [rad], (3,).
         timestep_s: physics step [s]; the cell's control period must be a whole multiple.
         noslip_iterations: MuJoCo no-slip solver iterations (stops a held contact from creeping).
         integrator: MuJoCo's integrator. ``"implicitfast"`` (default) is the most stable with
@@ -124,8 +127,10 @@ class SceneConfig:
             value = tuple(float(v) for v in getattr(self, name))
             if len(value) != 3 or not all(math.isfinite(v) for v in value):
                 raise ParameterError(f"SceneConfig.{name} must be 3 finite numbers")
-            if any(value) and not isinstance(self.arm, DHArmSpec):
-                raise ParameterError(f"SceneConfig.{name} needs an arm given by a DH table")
+            if any(value) and isinstance(self.arm, ArmSpec):
+                raise ParameterError(
+                    f"SceneConfig.{name} needs an arm given by a DH table or its joint frames"
+                )
         if max(map(abs, self.p_flange_sensor_m)) > MAX_SENSOR_OFFSET_M:
             raise ParameterError(
                 f"SceneConfig.p_flange_sensor_m must be within {MAX_SENSOR_OFFSET_M:g} m per axis"
@@ -186,7 +191,9 @@ _ARM_GEOM: Final = 'contype="0" conaffinity="0" rgba="0.85 0.85 0.9 1"'
 
 def flange_body_name(arm: ArmModel) -> str:
     """The MJCF body of the arm's tool flange: ``linkN``, or ``flange`` with a flange row."""
-    if isinstance(arm, DHArmSpec) and arm.has_flange_row:
+    if (isinstance(arm, DHArmSpec) and arm.has_flange_row) or (
+        isinstance(arm, ChainArmSpec) and arm.has_flange_offset
+    ):
         return "flange"
     return f"link{arm.n_joints}"
 
@@ -199,7 +206,7 @@ def _joint_xml(arm: ArmModel, i: int, axis: str, pos: str = "0 0 0") -> str:
     )
 
 
-def _inertial_xml(arm: DHArmSpec, i: int) -> str:
+def _inertial_xml(arm: DHArmSpec | ChainArmSpec, i: int) -> str:
     inertia = arm.link_inertia_kgm2[i]
     if inertia.ndim == 1:
         moments = f'diaginertia="{_f(inertia)}"'
@@ -256,9 +263,39 @@ def _dh_arm_xml(arm: DHArmSpec, tool_xml: str) -> str:
     return xml
 
 
+def _chain_arm_xml(arm: ChainArmSpec, tool_xml: str) -> str:
+    """Link ``i``'s body at joint ``i``'s frame, its joint about its axis through its origin;
+    the tool in a body ``flange`` when the flange sits off link N's frame."""
+    xml = tool_xml
+    if arm.has_flange_offset:
+        quat = _wxyz(Rotation.from_matrix(arm.R_link_flange))
+        xml = f"""
+        <body name="flange" pos="{_f(arm.p_link_flange_m)}" quat="{quat}">{xml}
+        </body>"""
+    for i in reversed(range(arm.n_joints)):
+        p = arm.p_parent_joint_m[i]
+        quat = _wxyz(Rotation.from_matrix(arm.R_parent_joint[i]))
+        # The parent frame's origin, seen from this one.
+        parent = _f(-arm.R_parent_joint[i].T @ p)
+        geom = (
+            f'<geom type="capsule" fromto="{parent} 0 0 0" size="0.045" {_ARM_GEOM}/>'
+            if np.linalg.norm(p) > 1e-6
+            else f'<geom type="sphere" size="0.045" {_ARM_GEOM}/>'
+        )
+        xml = f"""
+        <body name="link{i + 1}" pos="{_f(p)}" quat="{quat}">
+          {_joint_xml(arm, i, _f(arm.joint_axis[i]))}
+          {_inertial_xml(arm, i)}
+          {geom}{xml}
+        </body>"""
+    return xml
+
+
 def _arm_xml(arm: ArmModel, tool_xml: str) -> str:
     if isinstance(arm, DHArmSpec):
         return _dh_arm_xml(arm, tool_xml)
+    if isinstance(arm, ChainArmSpec):
+        return _chain_arm_xml(arm, tool_xml)
     m = arm.link_masses_kg
     arm_geom = _ARM_GEOM
 
@@ -329,7 +366,7 @@ def _tool_xml(config: SceneConfig) -> str:
               <site name="grasp_site" pos="{_f(tool.grasp_point_m)}" size="0.005"/>
             </body>"""
     hh = _HOUSING_HALF_HEIGHT_M
-    if isinstance(config.arm, DHArmSpec):
+    if not isinstance(config.arm, ArmSpec):
         # The sensor frame where the config puts it, its housing just behind it.
         R_flange_sensor = Rotation.from_rotvec(config.rotvec_flange_sensor_rad)
         housing_pos = np.asarray(config.p_flange_sensor_m) - R_flange_sensor.apply([0, 0, 2 * hh])
