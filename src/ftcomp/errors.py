@@ -22,11 +22,7 @@ __all__ = [
 
 
 class FtcompError(Exception):
-    """Base class of every error ftcomp raises on bad input or an impossible request."""
-
-
-class ParameterError(FtcompError, ValueError):
-    """A function or command-line parameter is out of its valid range or has the wrong shape.
+    """Base class of every error ftcomp raises on bad input or an impossible request.
 
     Attributes:
         fields: the config fields (or function arguments) at fault, as the message names them
@@ -35,9 +31,13 @@ class ParameterError(FtcompError, ValueError):
             message names fields, never flags.
     """
 
-    def __init__(self, message: str, *, field: str | tuple[str, ...] | None = None) -> None:
+    def __init__(self, message: str = "", *, field: str | tuple[str, ...] | None = None) -> None:
         super().__init__(message)
         self.fields: tuple[str, ...] = (field,) if isinstance(field, str) else tuple(field or ())
+
+
+class ParameterError(FtcompError, ValueError):
+    """A function or command-line parameter is out of its valid range or has the wrong shape."""
 
 
 class InputFileError(FtcompError):

@@ -16,13 +16,19 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.arrays import freeze_field
+from ftcomp.config_fields import FieldSpec
 from ftcomp.errors import ParameterError
 from ftcomp.frames import OrientationEncoding
 
-__all__ = ["WRENCH_COLUMNS", "PoseList", "Samples"]
+__all__ = ["SENSOR_RANGE", "WRENCH_COLUMNS", "PoseList", "Samples"]
 
 #: The six wrench columns, in order: forces [N] then torques [N*m], sensor frame.
 WRENCH_COLUMNS: tuple[str, ...] = ("fx", "fy", "fz", "tx", "ty", "tz")
+#: The rule of a sensor's measuring range ``(force_N, torque_Nm)``, per axis: a reading at or
+#: beyond it is saturated (a file's, a live loop's).
+SENSOR_RANGE = FieldSpec(
+    help="the sensor's measuring range per axis", unit="N, N*m", gt=0.0, length=2
+)
 
 
 @dataclass(frozen=True)

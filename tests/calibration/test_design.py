@@ -61,7 +61,7 @@ def test_spins_stay_within_their_band_about_the_tilted_axis() -> None:
     np.testing.assert_allclose(
         angle, np.tile(np.linspace(-90, 90, spins), len(straight)), atol=1e-9
     )
-    with pytest.raises(ParameterError, match="--max-spin-deg must be in"):
+    with pytest.raises(ParameterError, match="max_spin_deg must be in"):
         candidate_orientations(60.0, max_spin_deg=0.0)
 
 

@@ -48,7 +48,7 @@ def test_a_refused_load_leaves_no_run_folder(
     out = tmp_path / "run"
     args = ["sim", "place", "--surface", "sponge", "--control", "admittance", "--out", str(out)]
     assert main([*args, "--load-kg", load]) == 2
-    _one_error_line(capsys, "load_kg")
+    _one_error_line(capsys, "--load-kg")  # the flag typed (the library's error names load_kg)
     assert not out.exists()
 
 

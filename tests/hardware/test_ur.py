@@ -338,7 +338,7 @@ def controllers() -> Iterator[dict[str, str]]:
         ("ur://", None, "give the controller's address"),
         ("ur://{good}", "ur://{nobody}", "must be on the robot's controller"),
         ("ur://{good}", "ur://{good}?wrench=joint", "expected one of raw, tcp"),
-        ("sim://", "ur://{good}", "needs --robot ur://HOST"),
+        ("sim://", "ur://{good}", "needs a ur://HOST robot"),
     ],
 )
 def test_bad_configurations_are_one_clear_error_in_bounded_time(

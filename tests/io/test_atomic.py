@@ -81,7 +81,7 @@ def test_a_pseudo_filesystem_is_refused() -> None:
 
 def test_an_existing_output_needs_force(tmp_path: Path) -> None:
     (tmp_path / "o.json").write_text("{}")
-    with pytest.raises(ParameterError, match="pass --force"):
+    with pytest.raises(ParameterError, match="pass overwrite=True"):
         check_writable(tmp_path / "o.json", overwrite=False)
     assert check_writable(tmp_path / "o.json", overwrite=True) == tmp_path / "o.json"
 
@@ -90,7 +90,7 @@ def test_an_output_folder_with_files_needs_force(tmp_path: Path) -> None:
     out = tmp_path / "run"
     assert prepare_output_dir(out, overwrite=False).is_dir()
     (out / "report.html").write_text("edited by hand")
-    with pytest.raises(ParameterError, match="not empty; pass --force"):
+    with pytest.raises(ParameterError, match="not empty; pass overwrite=True"):
         prepare_output_dir(out, overwrite=False)
     assert prepare_output_dir(out, overwrite=True) == out
     (tmp_path / "afile").write_text("")

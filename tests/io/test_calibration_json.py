@@ -136,7 +136,7 @@ def test_atomic_write_leaves_the_old_file_when_writing_fails(tmp_path) -> None:
 def test_existing_files_are_not_replaced_without_being_asked(tmp_path) -> None:
     path = tmp_path / "x.json"
     path.write_text("mine")
-    with pytest.raises(ParameterError, match=r"x.json: exists; pass --force"):
+    with pytest.raises(ParameterError, match=r"x.json: exists; pass overwrite=True"):
         check_writable(path, overwrite=False)
     assert check_writable(path, overwrite=True) == path
 

@@ -106,7 +106,7 @@ def test_the_output_never_replaces_an_input_nor_an_existing_file_without_overwri
     with pytest.raises(ParameterError, match="is also an input"):
         compensate_file(src, cal, cal, CompensateConfig(overwrite=True))
     out.write_text("precious")
-    with pytest.raises(ParameterError, match="exists; pass --force"):
+    with pytest.raises(ParameterError, match="exists; pass overwrite=True"):
         compensate_file(src, out, calibration)
     assert out.read_text() == "precious"
     assert compensate_file(src, out, calibration, CompensateConfig(overwrite=True)).rows == 20

@@ -182,7 +182,7 @@ def test_an_existing_output_is_kept_unless_overwrite(
     out = tmp_path / "s.csv"
     out.write_text("keep me")
     cell = FakeCell(TRUE_MODEL, rng)
-    with pytest.raises(ParameterError, match="exists; pass --force"):
+    with pytest.raises(ParameterError, match="exists; pass overwrite=True"):
         record(cell, cell, driven(out))
     assert out.read_text() == "keep me" and cell.moves == 0
     config = RecordConfig(out, RobotDriven(paper_poses(), samples_per_pose=10), overwrite=True)

@@ -99,9 +99,13 @@ def candidate_orientations(
         ``R_base_sensor``, shape (M, 3, 3).
     """
     if not 0.0 < max_tilt_deg <= 180.0:
-        raise ParameterError(f"--max-tilt-deg must be in (0, 180], got {max_tilt_deg:g}")
+        raise ParameterError(
+            f"max_tilt_deg must be in (0, 180] deg, got {max_tilt_deg:g}", field="max_tilt_deg"
+        )
     if not 0.0 < max_spin_deg <= 180.0:
-        raise ParameterError(f"--max-spin-deg must be in (0, 180], got {max_spin_deg:g}")
+        raise ParameterError(
+            f"max_spin_deg must be in (0, 180] deg, got {max_spin_deg:g}", field="max_spin_deg"
+        )
     if max_spin_deg >= 180.0 or spins == 1:
         spin_deg = 360.0 * np.arange(spins) / spins
     else:
@@ -200,9 +204,10 @@ def design_poses(
     kept = np.zeros((0, 3, 3)) if keep is None else np.asarray(keep, dtype=float)
     if count < 1 or count + len(kept) < MIN_POSES:
         raise ParameterError(
-            f"--count {count}: the design needs at least {MIN_POSES} poses in all (with "
+            f"count {count}: the design needs at least {MIN_POSES} poses in all (with "
             f"{len(kept)} kept) to identify the 12 parameters (bias, weight, centre of "
-            "gravity, tilt)"
+            "gravity, tilt)",
+            field="count",
         )
     blocks = fisher_blocks(candidates, theta, noise_6=noise_6)
     fixed = (
@@ -215,7 +220,8 @@ def design_poses(
     while True:
         if usable.sum() < count:
             raise ParameterError(
-                f"only {int(usable.sum())} reachable candidate orientations for --count {count}"
+                f"only {int(usable.sum())} reachable candidate orientations for count {count}",
+                field="count",
             )
         allowed = np.flatnonzero(usable)
         sub = blocks[allowed]

@@ -72,8 +72,9 @@ def drift_times(samples: Samples, order: int) -> DriftTimes:
     name = "linear" if order == 1 else "quadratic"
     if samples.t is None:
         raise IdentificationError(
-            f"{samples.source}: --bias-drift {name} needs each reading's time: the file "
-            "has no 't' (or 't_ns') column"
+            f"{samples.source}: bias_drift {name} needs each reading's time: the file "
+            "has no 't' (or 't_ns') column",
+            field="bias_drift",
         )
     group, first = pose_groups(samples)
     poses = len(first)

@@ -79,9 +79,9 @@ def _check_not_continuous(samples: Samples, poses: int) -> None:
             f"{samples.source}: no 'pose' column, and the orientation changes from row to row "
             f"({poses} orientations in {n} rows, median step {step_deg:.2g} deg): a recording "
             "in motion, not readings at still poses; cut it into still segments first "
-            "(still-segment detection: ftcomp calibrate --still-segments for any recording with "
-            "a 't' column, ftcomp import-bag for bags) with a pose id each, or add a 'pose' "
-            "column"
+            "(still_segments for any recording with a 't' column, ftcomp import-bag for bags) "
+            "with a pose id each, or add a 'pose' column",
+            field="still_segments",
         )
 
 

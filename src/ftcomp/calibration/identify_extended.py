@@ -76,9 +76,10 @@ def calibrate_extended(
     if bias_drift == "stochastic" or sensor_map:
         if identify_mount is not None or bias_drift in ("linear", "quadratic"):
             raise IdentificationError(
-                "--bias-drift stochastic and --sensor-map combine with neither --identify-mount "
+                "bias_drift stochastic and sensor_map combine with neither identify_mount "
                 "nor a polynomial drift (identify the mount first, with a constant or "
-                "polynomial bias)"
+                "polynomial bias)",
+                field=("bias_drift", "sensor_map", "identify_mount"),
             )
         return _calibrate_stochastic(
             samples,
@@ -93,8 +94,9 @@ def calibrate_extended(
         )
     if order and samples.t is None:
         raise IdentificationError(
-            f"{samples.source}: --bias-drift {bias_drift} needs each reading's time: the file "
-            "has no 't' (or 't_ns') column"
+            f"{samples.source}: bias_drift {bias_drift} needs each reading's time: the file "
+            "has no 't' (or 't_ns') column",
+            field="bias_drift",
         )
     base = calibrate(samples, method="joint", leave_one_out=False)
     ids, R, wrench, count, var_mean = pose_means(samples)
@@ -103,10 +105,11 @@ def calibrate_extended(
     if identify_mount is not None:
         needed = max(needed, MIN_POSES[identify_mount])
     if needed > P:
-        what = [f"--bias-drift {bias_drift}"] if order else []
-        what += [f"--identify-mount {identify_mount}"] if identify_mount else []
+        what = [f"bias_drift {bias_drift}"] if order else []
+        what += [f"identify_mount {identify_mount}"] if identify_mount else []
         raise IdentificationError(
-            f"{samples.source}: {P} poses; {' with '.join(what)} needs at least {needed}"
+            f"{samples.source}: {P} poses; {' with '.join(what)} needs at least {needed}",
+            field=("bias_drift", "identify_mount"),
         )
     times = drift_times(samples, order) if order else None
     tau = None if times is None else times.tau

@@ -116,8 +116,9 @@ class Reachability:
                 f"{self.source}: {self.sampled - self.sampled_reached} of {self.sampled} "
                 "candidate orientations sampled at random are out of reach with the tip at "
                 f"{np.round(self.p, 4).tolist()} m ({self.fraction()} reachable); too few "
-                f"reachable ones for --count {count}: give a --position-mm where the arm turns "
-                "the tip more freely, or a smaller --max-tilt-deg"
+                f"reachable ones for count {count}: give a position_mm where the arm turns "
+                "the tip more freely, or a smaller max_tilt_deg",
+                field=("count", "position_mm", "max_tilt_deg"),
             )
         return np.asarray(pool)
 

@@ -54,8 +54,9 @@ def pose_times(samples: Samples) -> NDArray[np.float64]:
     """
     if samples.t is None:
         raise IdentificationError(
-            f"{samples.source}: --bias-drift stochastic needs each reading's time: the file "
-            "has no 't' (or 't_ns') column"
+            f"{samples.source}: bias_drift stochastic needs each reading's time: the file "
+            "has no 't' (or 't_ns') column",
+            field="bias_drift",
         )
     t = samples.t
     back = np.flatnonzero(np.diff(t) < 0.0)
@@ -63,8 +64,9 @@ def pose_times(samples: Samples) -> NDArray[np.float64]:
         k = int(back[0]) + 1
         raise IdentificationError(
             f"{samples.source}: t must not decrease from one reading to the next (row {k + 1}: "
-            f"{t[k]:.9g} s after {t[k - 1]:.9g} s): --bias-drift stochastic needs the readings "
-            "in recording order on one clock"
+            f"{t[k]:.9g} s after {t[k - 1]:.9g} s): bias_drift stochastic needs the readings "
+            "in recording order on one clock",
+            field="bias_drift",
         )
     group, first = pose_groups(samples)
     poses = len(first)
@@ -72,8 +74,9 @@ def pose_times(samples: Samples) -> NDArray[np.float64]:
     if np.any(np.diff(t_pose) <= 0.0):
         raise IdentificationError(
             f"{samples.source}: the poses' mean times do not increase in recording order (a "
-            "pose revisited later, or poses at one time): --bias-drift stochastic needs each "
-            "pose id recorded once, at its own time"
+            "pose revisited later, or poses at one time): bias_drift stochastic needs each "
+            "pose id recorded once, at its own time",
+            field="bias_drift",
         )
     return t_pose
 
@@ -219,8 +222,9 @@ def fit_stochastic(
     P = len(wrench)
     if drift and P < MIN_POSES:
         raise IdentificationError(
-            f"{source}: {P} poses; --bias-drift stochastic needs at least {MIN_POSES} (12 tool "
-            "parameters and 9 hyperparameters of the drift from 6 numbers per pose)"
+            f"{source}: {P} poses; bias_drift stochastic needs at least {MIN_POSES} (12 tool "
+            "parameters and 9 hyperparameters of the drift from 6 numbers per pose)",
+            field="bias_drift",
         )
     n = 30 if sensor_map else 12
     problem = _Problem(wrench, R, sigma, t_pose_s, n)

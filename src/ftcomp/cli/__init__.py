@@ -96,6 +96,9 @@ def _add(
         parser = commands.add_parser(name, help=help_text, description=help_text)
         if name == chosen:
             importlib.import_module(module).register(parser)
+            from ftcomp.cli.options import map_options
+
+            map_options(parser)
 
 
 class _Parser(argparse.ArgumentParser):

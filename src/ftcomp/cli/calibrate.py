@@ -6,13 +6,20 @@ import argparse
 import json
 import math
 import sys
+from typing import get_args
 
 import numpy as np
 from rich.console import Console
 from rich.table import Table
 
 from ftcomp.calibration.identify import calibrate
-from ftcomp.calibration_record import Calibration, StochasticBiasDrift
+from ftcomp.calibration_record import (
+    Calibration,
+    DriftModel,
+    Method,
+    MountAxes,
+    StochasticBiasDrift,
+)
 from ftcomp.cli.common import add_range_argument, print_warnings
 from ftcomp.cli.still_options import add_still_arguments, print_segments, still_config
 from ftcomp.errors import ParameterError
@@ -49,14 +56,14 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--method",
-        choices=("paper", "joint"),
+        choices=get_args(Method),
         default="joint",
         help="paper: the paper's two-stage linear fit; joint: weighted joint nonlinear fit "
         "(docs/calibration.md; default: joint)",
     )
     parser.add_argument(
         "--bias-drift",
-        choices=("none", "linear", "quadratic", "stochastic"),
+        choices=get_args(DriftModel),
         default="none",
         help="fit the force and torque bias as a function of each reading's time t, with the "
         "tool model shared: a polynomial, or stochastic (a smooth Matérn 3/2 wander, its size "
@@ -65,7 +72,7 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--identify-mount",
-        choices=("yaw", "full"),
+        choices=get_args(MountAxes),
         default=None,
         help="the orientations are the flange's or TCP's: identify the sensor frame's rotation "
         "in that frame too (yaw about its z axis, 4+ poses; or all three angles, 6+ poses; "

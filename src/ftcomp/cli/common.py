@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from collections.abc import Iterable
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ftcomp.errors import ParameterError
 
@@ -30,17 +29,19 @@ __all__ = [
 
 
 def parse_range(text: str) -> tuple[float, float]:
-    """``"250,6"`` -> ``(250.0, 6.0)``: a sensor's force [N] and torque [N*m] range."""
-    parts = text.split(",")
+    """``"250,6"`` -> ``(250.0, 6.0)``: a sensor's force [N] and torque [N*m] range, by its rule
+    (:data:`ftcomp.samples.SENSOR_RANGE`)."""
+    from ftcomp.config_fields import check_value
+    from ftcomp.samples import SENSOR_RANGE
+
     try:
-        values = tuple(float(p) for p in parts)
-    except ValueError:
-        values = ()
-    if len(values) != 2 or not all(math.isfinite(v) and v > 0 for v in values):
+        values: Any = check_value("range", SENSOR_RANGE, [float(p) for p in text.split(",")])
+    except (ValueError, ParameterError):
         raise argparse.ArgumentTypeError(
-            f"expected FORCE_N,TORQUE_NM with two positive numbers, e.g. 250,6; got {text!r}"
-        )
-    return values[0], values[1]
+            f"expected FORCE_N,TORQUE_NM, two numbers {SENSOR_RANGE.rule()}, e.g. 250,6; "
+            f"got {text!r}"
+        ) from None
+    return float(values[0]), float(values[1])
 
 
 def print_warnings(warnings: Iterable[str]) -> None:
@@ -91,26 +92,29 @@ def add_track_bias_argument(parser: argparse.ArgumentParser) -> None:
 
 def add_rebias_argument(parser: argparse.ArgumentParser) -> None:
     """``--rebias-s``: the calibration's bias re-estimated from still readings at the start."""
-    parser.add_argument(
+    from ftcomp.cli.options import add_field_option
+    from ftcomp.session.rebias_live import REBIAS_DURATION
+
+    add_field_option(
+        parser,
+        REBIAS_DURATION,
+        "rebias_s",
         "--rebias-s",
-        type=float,
+        default=None,
+        none_means="the calibration's bias",
         metavar="SECONDS",
         help="first re-estimate the calibration's bias from SECONDS of readings with the arm "
         "still and nothing touching the tool (the tool model kept, gravity-aware; a drift "
         "model dropped), then start from the bias now; with --track-bias, tracking follows "
-        "it from there (default: the calibration's bias)",
+        "it from there",
     )
 
 
 def check_rebias_argument(args: argparse.Namespace) -> None:
-    """``--rebias-s`` needs a calibration and a duration > 0."""
-    seconds = args.rebias_s
-    if seconds is None:
-        return
-    if not args.calibration:
+    """``--rebias-s`` needs a calibration (its range is checked by its rule,
+    :data:`ftcomp.session.rebias_live.REBIAS_DURATION`)."""
+    if args.rebias_s is not None and not args.calibration:
         raise ParameterError("--rebias-s needs the tool's calibration (-c)")
-    if not (math.isfinite(seconds) and 0.0 < seconds <= 60.0):
-        raise ParameterError(f"--rebias-s must be in (0, 60] s, got {seconds:g}")
 
 
 def live_end_lines(result: LiveResult) -> list[str]:

@@ -12,6 +12,8 @@ __all__ = ["register", "run"]
 
 def register(parser: argparse.ArgumentParser) -> None:
     """Add the ``export`` command's arguments to its parser."""
+    from ftcomp.ros2.export import DISTROS
+
     parser.description = (
         "Write a calibration as ros2_control parameters: the force_torque_sensor_broadcaster "
         "section loads as it is (its offsets remove the bias; on Jazzy and later a "
@@ -62,7 +64,7 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--distro",
-        choices=("humble", "jazzy", "kilted", "rolling"),
+        choices=DISTROS,
         default="jazzy",
         help="the ROS 2 distribution: humble has no broadcaster filter chain and no "
         "GravityCompensationWrench (the file then has the offsets and the admittance gravity "

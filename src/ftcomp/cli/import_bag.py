@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 
+from ftcomp.cli.options import map_field, with_flags
 from ftcomp.cli.still_options import add_still_arguments, print_segments, still_config
 
 __all__ = ["register", "run"]
@@ -54,6 +55,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="the sample CSV to write (pose ids per still segment, t_ns and t)",
     )
     parser.add_argument("--force", action="store_true", help="replace an existing output file")
+    map_field(parser, "joint_states_topic", "--joint-states")
     parser.set_defaults(handler=run)
 
 
@@ -82,10 +84,10 @@ def run(args: argparse.Namespace) -> int:
         )
     finally:
         bar.close()
-    print_warnings(result.warnings)
+    print_warnings(with_flags(w, args, ["wrench_frame"]) for w in result.warnings)
     out = console()
     out.print(f"pose: {result.pose_source}")
-    out.print(f"wrench: {result.wrench_note}")
+    out.print(f"wrench: {with_flags(result.wrench_note, args, ['wrench_frame'])}")
     title = f"Still segments in {result.source} ({args.wrench_topic})"
     print_segments(out, title, result.segments, result.t0_ns, still)
     kept = len(result.t_ns)

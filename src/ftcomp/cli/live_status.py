@@ -19,6 +19,9 @@ import sys
 import time
 from typing import TYPE_CHECKING, TextIO
 
+from ftcomp.cli.options import map_field
+from ftcomp.errors import ParameterError
+
 if TYPE_CHECKING:
     from ftcomp.session.stream import StreamProgress
 
@@ -31,9 +34,16 @@ DEFAULT_VIEW_HOST = "127.0.0.1"
 
 def view_address(text: str) -> str:
     """``HOST:PORT`` from ``--view``'s value (``PORT`` alone: on the loopback address)."""
+    from ftcomp.views.foxglove_view import parse_address
+
     host, _, port = text.rpartition(":")
-    if not port.isdigit() or not 0 < int(port) < 65536:
-        raise argparse.ArgumentTypeError(f"expected HOST:PORT with a port 1..65535, got {text!r}")
+    address = f"{host or DEFAULT_VIEW_HOST}:{port}"
+    try:
+        parse_address(address)  # the library's rule for an address
+    except ParameterError:
+        raise argparse.ArgumentTypeError(
+            f"expected HOST:PORT or PORT, with a port 1..65535, got {text!r}"
+        ) from None
     return f"{host or DEFAULT_VIEW_HOST}:{int(port)}"
 
 
@@ -54,6 +64,7 @@ def add_view_arguments(parser: argparse.ArgumentParser) -> None:
         f"ws://HOST:PORT in Foxglove or Lichtblick; PORT alone: on {DEFAULT_VIEW_HOST}; "
         "default: none)",
     )
+    map_field(parser, "address", "--view")
 
 
 class StatusLine:

@@ -27,8 +27,13 @@ __all__ = [
     "check_field_options",
     "error_line",
     "map_field",
+    "map_options",
+    "with_flags",
 ]
 
+#: Options whose destination the library calls by another name: every ``--force`` is the
+#: library's ``overwrite``.
+_LIBRARY_NAMES = {"force": "overwrite"}
 #: The namespace attributes holding a command's field options and its field -> flag map.
 _OPTIONS, _FLAGS = "field_options", "field_flags"
 
@@ -96,9 +101,21 @@ def map_field(parser: argparse.ArgumentParser, field: str, flag: str) -> None:
     _registry(parser, _FLAGS, dict).setdefault(field, flag)
 
 
+def map_options(parser: argparse.ArgumentParser) -> None:
+    """Name each option's flag in place of the field of the same name as its destination
+    (``--log`` for ``log``); an explicit :func:`map_field` or :func:`add_field_option` wins.
+    ``ftcomp.cli`` calls it for the command it registers."""
+    for action in parser._actions:
+        long = [o for o in action.option_strings if o.startswith("--")]
+        if long and action.dest != "help":
+            map_field(parser, action.dest, long[0])
+            if action.dest in _LIBRARY_NAMES:
+                map_field(parser, _LIBRARY_NAMES[action.dest], long[0])
+
+
 def add_field_option(
     parser: argparse.ArgumentParser,
-    config: type,
+    config: type | FieldSpec,
     field: str,
     flag: str | None = None,
     *,
@@ -116,8 +133,8 @@ def add_field_option(
     Args:
         parser: the command's parser.
         config: the config class (a dataclass whose field was declared with
-            :func:`ftcomp.config_fields.param`).
-        field: the field's name.
+            :func:`ftcomp.config_fields.param`), or the rule of a function's argument.
+        field: the field's name (with a rule alone: the name errors on it use).
         flag: the option's flag.
         scale: the factor from the option's unit to the field's [SI per option unit].
         unit: the option's unit (default: the field's).
@@ -130,15 +147,17 @@ def add_field_option(
         none_means: what no value means, for the help (when the default is None).
         kwargs: passed to ``add_argument`` (``metavar``, ``required``, ``type``, ...).
     """
-    spec = spec_of(config, field)
+    spec = config if isinstance(config, FieldSpec) else spec_of(config, field)
     flag = flag or "--" + field.replace("_", "-")
     unit = spec.unit if unit is None else unit
-    if default is dataclasses.MISSING:
+    if default is dataclasses.MISSING and not isinstance(config, FieldSpec):
         default = _field_default(config, field)
         if isinstance(default, (tuple, list)) and element is not None:
             default = default[element]
         if isinstance(default, float):
             default = default / scale
+    elif default is dataclasses.MISSING:
+        default = None
     if spec.choices is not None:
         kwargs.setdefault("choices", spec.choices)
     elif "action" not in kwargs and "type" not in kwargs and not isinstance(default, str):
@@ -187,10 +206,17 @@ def check_field_options(args: argparse.Namespace) -> None:
 
 
 def error_line(exc: FtcompError, args: argparse.Namespace) -> str:
-    """The message of ``exc``, each field it names replaced by its command's flag."""
-    message = str(exc)
+    """The message of ``exc``, each field it names replaced by its command's flag (a switch's
+    ``field=True`` too: ``overwrite=True`` is ``--force``)."""
+    return with_flags(str(exc), args, exc.fields)
+
+
+def with_flags(text: str, args: argparse.Namespace, fields: Sequence[str]) -> str:
+    """``text`` (a library message or note) with each of ``fields`` replaced by the flag that
+    sets it in this command (a field the command has no flag for stays as it is)."""
     flags: dict[str, str] = getattr(args, _FLAGS, None) or {}
-    for field in getattr(exc, "fields", ()):
+    for field in fields:
         if field in flags:
-            message = re.sub(rf"(?<![\w.-]){re.escape(field)}(?![\w-])", flags[field], message)
-    return message
+            word = rf"(?<![\w.-]){re.escape(field)}(?:=True)?(?![\w-])"
+            text = re.sub(word, flags[field], text)
+    return text

@@ -12,7 +12,9 @@ import sys
 from pathlib import Path
 
 from ftcomp.cli.common import warn_live_drift
+from ftcomp.cli.options import add_field_option, map_field
 from ftcomp.errors import ParameterError
+from ftcomp.session.placement import DEFAULT_GAINS, PlacementConfig
 
 __all__ = ["register"]
 
@@ -22,8 +24,6 @@ IDENTIFY_SAMPLES_PER_POSE = 200
 
 def register(p: argparse.ArgumentParser) -> None:
     """Add the ``place`` command's arguments to its parser."""
-    from ftcomp.session.placement import DEFAULT_GAINS, PlacementConfig
-
     gains = "; ".join(
         f"{surface} k13 = {k1 * 1e3:g} mm/N, k23 = {k2 * 1e3:g} mm/(s*N)"
         for surface, (k1, k2) in DEFAULT_GAINS.items()
@@ -45,16 +45,17 @@ def register(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--surface",
-        choices=("sponge", "book"),
+        choices=tuple(DEFAULT_GAINS),
         required=True,
         help="sponge: a 1500 N/m spring pad; book: a stiff block (required)",
     )
-    p.add_argument(
-        "--control",
-        choices=("position", "admittance"),
+    add_field_option(
+        p,
+        PlacementConfig,
+        "control",
         required=True,
         help="position: constant-speed descent to a fixed depth, no force feedback (Fig. 6); "
-        "admittance: the combined law above (Fig. 7) (required)",
+        "admittance: the combined law above (Fig. 7)",
     )
     p.add_argument(
         "-c",
@@ -70,22 +71,21 @@ def register(p: argparse.ArgumentParser) -> None:
         help="control on raw readings, bias and tool weight left in (Fig. 7) "
         "(default: compensated)",
     )
-    p.add_argument(
-        "--k1",
-        type=float,
-        metavar="MM_PER_N",
-        help="admittance k13 [mm/N], >= 0 (default per surface, see above; not with "
-        "--control position)",
-    )
-    p.add_argument(
-        "--k2",
-        type=float,
-        metavar="MM_PER_S_PER_N",
-        help="admittance k23 [mm/(s*N)], >= 0 (default per surface, see above; not with "
-        "--control position)",
-    )
+    for name, field, unit in (("k1", "k1_m_per_N", "mm/N"), ("k2", "k2_m_per_s_N", "mm/(s*N)")):
+        add_field_option(
+            p,
+            PlacementConfig,
+            field,
+            f"--{name}",
+            scale=1e-3,
+            unit=unit,
+            default=None,
+            none_means="per surface, see above; not with --control position",
+            help=f"admittance {name}3",
+            metavar=unit.upper().replace("/", "_PER_").replace("(S*N)", "S_N"),
+        )
     p.add_argument("--load-kg", type=float, default=0.5, help="the load's mass [kg] (default: 0.5)")
-    p.add_argument("--seed", type=int, default=0, help="sensor-noise seed, >= 0 (default: 0)")
+    p.add_argument("--seed", type=int, default=0, help="sensor-noise seed (default: 0)")
     p.add_argument(
         "--out", required=True, metavar="DIR", help="output folder for the run's files (required)"
     )
@@ -100,18 +100,15 @@ def register(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="write into an --out folder that already holds files (default: refuse)",
     )
+    for field, flag in (("seed", "--seed"), ("load_kg", "--load-kg"), ("surface", "--surface")):
+        map_field(p, field, flag)
     p.set_defaults(handler=_run)
 
 
 def _run(args: argparse.Namespace) -> int:
     from ftcomp.io.atomic import prepare_output_dir
     from ftcomp.io.calibration_json import load_calibration, save_calibration
-    from ftcomp.session.placement import (
-        DEFAULT_GAINS,
-        PlacementConfig,
-        run_placement,
-        write_placement_outputs,
-    )
+    from ftcomp.session.placement import run_placement, write_placement_outputs
     from ftcomp.sim.placement_cell import SimPlacementCell
     from ftcomp.views.figures import plot_placement
 
@@ -123,11 +120,6 @@ def _run(args: argparse.Namespace) -> int:
     k1_default, k2_default = DEFAULT_GAINS[args.surface]
     k1_m = k1_default if args.k1 is None else args.k1 * 1e-3
     k2_m = k2_default if args.k2 is None else args.k2 * 1e-3
-    for name, value in (("--k1", k1_m), ("--k2", k2_m)):
-        if not value >= 0.0:
-            raise ParameterError(f"{name} must be >= 0, got {value * 1e3:g}")
-    if args.seed < 0:
-        raise ParameterError(f"--seed must be >= 0, got {args.seed}")
     config = PlacementConfig(
         args.control,
         compensation=not args.no_compensation,

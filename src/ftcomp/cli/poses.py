@@ -7,7 +7,6 @@ import argparse
 import contextlib
 import csv
 import io
-import math
 import sys
 from pathlib import Path
 
@@ -205,12 +204,6 @@ def run(args: argparse.Namespace) -> int:
     open, as a context manager, until the design is written)."""
     from ftcomp.io.poses_csv import read_pose_file
 
-    if args.count < 1:
-        raise ParameterError(f"--count {args.count}: must be at least 1")
-    if not math.isfinite(args.max_tilt_deg) or not 0.0 < args.max_tilt_deg <= 180.0:
-        raise ParameterError(f"--max-tilt-deg {args.max_tilt_deg:g}: must be in (0, 180]")
-    if not math.isfinite(args.max_spin_deg) or not 0.0 < args.max_spin_deg <= 180.0:
-        raise ParameterError(f"--max-spin-deg {args.max_spin_deg:g}: must be in (0, 180]")
     for flag in ("base_link", "tip_link"):
         if getattr(args, flag) is not None and args.urdf is None:
             raise ParameterError(f"--{flag.replace('_', '-')} needs --urdf")

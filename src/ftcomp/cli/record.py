@@ -19,11 +19,12 @@ import argparse
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, get_args
 
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import PoseProgress, add_view_arguments
 from ftcomp.errors import ParameterError
+from ftcomp.frames import OrientationEncoding
 
 if TYPE_CHECKING:
     from ftcomp.session.pose_record import PoseEvent
@@ -93,7 +94,7 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--encoding",
-        choices=("quaternion", "rotvec", "paper_euler"),
+        choices=get_args(OrientationEncoding),
         default="quaternion",
         help="orientation columns to write (default quaternion)",
     )

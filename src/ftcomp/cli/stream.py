@@ -20,7 +20,6 @@ start is no step and counts as contact.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from typing import TYPE_CHECKING
 
@@ -33,7 +32,9 @@ from ftcomp.cli.common import (
 )
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import StatusLine, add_view_arguments
+from ftcomp.cli.options import add_field_option
 from ftcomp.errors import ParameterError
+from ftcomp.session.stream import StreamConfig
 
 #: How long the readings' rate is measured when --online-rate-hz is not given [s]: the value of
 #: ftcomp.session.online_load.MEASURE_RATE_S (a test checks), here so --help needs no numpy.
@@ -62,17 +63,17 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="weigh a grasped load online and compensate it too (needs -c and a pose; "
         "default: off, the tool alone)",
     )
-    parser.add_argument(
-        "--online-rate-hz",
-        type=float,
+    add_field_option(
+        parser,
+        StreamConfig,
+        "online_rate_hz",
         metavar="HZ",
-        help="the sensor's sample rate, which times the grasp detector's windows [Hz] (default: "
-        f"measured from the stamps of the first {_MEASURE_S:g} s of readings, held back and "
-        "then logged)",
+        none_means=f"measured from the stamps of the first {_MEASURE_S:g} s of readings, held "
+        "back and then logged",
     )
     add_track_bias_argument(parser)
     add_rebias_argument(parser)
-    parser.add_argument("--seconds", type=float, required=True, help="how long to log [s]")
+    add_field_option(parser, StreamConfig, "duration_s", "--seconds", required=True)
     parser.add_argument(
         "-o", "--output", required=True, metavar="LOG.csv", help="the log, one row per reading"
     )
@@ -97,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.io.calibration_json import load_calibration
     from ftcomp.session.online_load import event_lines
     from ftcomp.session.rebias_live import rebias_still
-    from ftcomp.session.stream import StreamConfig, stream
+    from ftcomp.session.stream import stream
     from ftcomp.views.live import session_observers
 
     if args.online_rate_hz is not None and not args.online_load:
@@ -110,11 +111,7 @@ def run(args: argparse.Namespace) -> int:
             "(from ftcomp calibrate)"
         )
     check_rebias_argument(args)
-    if not (math.isfinite(args.seconds) and args.seconds > 0.0):
-        raise ParameterError(f"--seconds must be > 0, got {args.seconds:g}")
     rate = args.online_rate_hz
-    if rate is not None and not (math.isfinite(rate) and 0.0 < rate <= 100_000.0):
-        raise ParameterError(f"--online-rate-hz must be in (0, 100000] Hz, got {rate:g}")
     config = StreamConfig(
         args.seconds,
         with_pose=args.robot is not None,

@@ -25,8 +25,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.arrays import frozen_array
-from ftcomp.config_fields import check_fields, param
+from ftcomp.config_fields import check_fields, check_value, param
 from ftcomp.errors import ParameterError
+from ftcomp.samples import SENSOR_RANGE
 
 __all__ = [
     "MAX_ROTATION_ACCEL_RAD_S2",
@@ -148,12 +149,8 @@ class SafetyLimits:
             ),
         )
         r = self.sensor_range
-        if r is not None and not (
-            len(r) == 2 and all(isinstance(v, (int, float)) and v > 0.0 for v in r)
-        ):
-            raise ParameterError(
-                f"sensor_range must be (force_N, torque_Nm) > 0, got {r!r}", field="sensor_range"
-            )
+        if r is not None:
+            check_value("sensor_range", SENSOR_RANGE, r)
         per_axis = None if r is None else frozen_array(np.repeat(r, 3), (6,), name="sensor_range")
         object.__setattr__(self, "_range_per_axis", per_axis)
 

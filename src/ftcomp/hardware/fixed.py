@@ -74,7 +74,7 @@ class FixedRobot(LatenessOfPacer, NothingToClose):
         Raises:
             HardwareError: always.
         """
-        raise HardwareError("fixed:// cannot move: give --robot a real arm to visit poses")
+        raise HardwareError("fixed:// cannot move: visiting poses needs a robot arm")
 
     def settle(self, max_duration_s: float) -> float:
         """Already at rest."""

@@ -88,7 +88,7 @@ class URWrenchSensor(NothingToClose):
             version = ".".join(map(str, self.robot.version))
             raise ParameterError(
                 f"{self.robot.uri.text!r}: this controller ({version}) has no ft_raw_wrench "
-                "(PolyScope 5.9 or later); use --sensor 'ur://HOST?wrench=tcp'"
+                "(PolyScope 5.9 or later); use the sensor 'ur://HOST?wrench=tcp'"
             )
         at_flange = self.robot.version[0] >= FLANGE_FORCE_MAJOR
         if self.wrench == "tcp" and at_flange and self.tcp_offset is None:
@@ -141,7 +141,7 @@ class URWrenchSensor(NothingToClose):
 def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
     """The built-in sensor of the session's ``ur://`` robot (same host)."""
     if not isinstance(robot, URRobot):
-        raise ParameterError(f"{uri.text!r}: the UR's built-in sensor needs --robot ur://HOST")
+        raise ParameterError(f"{uri.text!r}: the UR's built-in sensor needs a ur://HOST robot")
     if uri.host != robot.host:
         raise ParameterError(
             f"{uri.text!r}: the built-in sensor must be on the robot's controller "
@@ -162,7 +162,8 @@ def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
         if wrench != "tcp":
             raise ParameterError(
                 f"{uri.text!r}: tcp_offset_mm and tcp_rotvec_rad are for wrench=tcp (ft_raw_wrench "
-                "is in the flange frame: give the mount with --mount)"
+                "is in the flange frame: give it as the mount instead)",
+                field="mount",
             )
         if not (given_offset and given_rotvec):
             raise ParameterError(

@@ -79,7 +79,9 @@ def check_writable(path: PathLike, *, overwrite: bool, inputs: Iterable[PathLike
     if target.is_dir():
         raise ParameterError(f"{target}: is a directory, expected a file path")
     if target.exists() and not overwrite:
-        raise ParameterError(f"{target}: exists; pass --force (overwrite=True) to replace it")
+        raise ParameterError(
+            f"{target}: exists; pass overwrite=True to replace it", field="overwrite"
+        )
     if target.exists() and not stat.S_ISREG(target.stat().st_mode):
         raise ParameterError(f"{target}: is not a regular file; choose another output")
     _writable_folder(target.parent, target)
@@ -110,8 +112,9 @@ def prepare_output_dir(
             raise ParameterError(f"{out}: holds {source}, an input of this command; choose another")
     if out.is_dir() and any(out.iterdir()) and not overwrite:
         raise ParameterError(
-            f"{out}: exists and is not empty; pass --force to write into it (files of the same "
-            "name are replaced)"
+            f"{out}: exists and is not empty; pass overwrite=True to write into it (files of "
+            "the same name are replaced)",
+            field="overwrite",
         )
     _writable_folder(out, out)
     if create:

@@ -293,13 +293,14 @@ def read_wrenches(
             said = ", ".join(repr(f) for f in sorted(frames))
             notes.append(
                 f"{source}: readings on {topic} say header.frame_id {said}; taken as in "
-                f"{stated!r} as stated (--wrench-frame)"
+                f"{stated!r} as stated (wrench_frame)"
             )
         frames = {stated}
     elif len(frames) > 1:
         raise InputFileError(
             f"{source}: topic {topic!r} has readings in frames {', '.join(sorted(frames))}; "
-            "expected one (give the readings' frame with --wrench-frame)"
+            "expected one (give the readings' frame as wrench_frame)",
+            field="wrench_frame",
         )
     t, warnings = _choose_stamps(header_ns, log_ns, topic, source)
     order = np.argsort(t, kind="stable")
@@ -323,7 +324,8 @@ def read_transforms(
     if dynamic not in present and static not in present:
         raise InputFileError(
             f"{source}: no {dynamic} or {static} topic for the sensor's pose; record them, "
-            "or give the robot description and joint states (--urdf, --joint-states)"
+            "or give the robot description and joint states (urdf, joint_states_topic)",
+            field=("urdf", "joint_states_topic"),
         )
     records: list[TransformRecord] = []
     for topic in topics:

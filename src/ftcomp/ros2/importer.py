@@ -114,20 +114,26 @@ def _fixed_pose(
     problem += f"{sensor_frame!r}"
     hint = (
         " (if the driver stamps sensor-frame readings with another frame_id, as "
-        "netft_rdt_driver's default 'base_link', give --wrench-frame)"
+        "netft_rdt_driver's default 'base_link', give wrench_frame)"
     )
     if tree is not None:
         if frame not in tree.frames:
-            raise InputFileError(f"{problem}, and {frame!r} is not in the tf tree{hint}")
+            raise InputFileError(
+                f"{problem}, and {frame!r} is not in the tf tree{hint}", field="wrench_frame"
+            )
         if not tree.is_static(sensor_frame, frame):
-            raise InputFileError(f"{problem}, and the transform between them is not static{hint}")
+            raise InputFileError(
+                f"{problem}, and the transform between them is not static{hint}",
+                field="wrench_frame",
+            )
         p, R, _ = tree.lookup(sensor_frame, frame, np.zeros(1, dtype=np.int64))
         return p[0], R[0]
     assert urdf is not None
     chain = UrdfChain(urdf, sensor_frame, frame)
     if chain.joint_names:
         raise InputFileError(
-            f"{problem}, and joints {', '.join(chain.joint_names)} move between them{hint}"
+            f"{problem}, and joints {', '.join(chain.joint_names)} move between them{hint}",
+            field="wrench_frame",
         )
     T = chain.forward({}, 1)[0]
     return T[:3, 3], Rotation.from_matrix(T[:3, :3])
@@ -193,7 +199,10 @@ def import_bag(
         ParameterError: ``urdf`` without ``joint_states_topic`` or the other way round.
     """
     if (urdf is None) != (joint_states_topic is None):
-        raise ParameterError("--urdf and --joint-states go together: give both or neither")
+        raise ParameterError(
+            "urdf and joint_states_topic go together: give both or neither",
+            field=("urdf", "joint_states_topic"),
+        )
     config = still if still is not None else StillConfig()
     source = str(path)
     urdf_path = Path(urdf) if urdf is not None else None
@@ -227,8 +236,9 @@ def import_bag(
     if not frame:
         raise InputFileError(
             f"{source}: readings on {wrench_topic} have an empty header.frame_id; "
-            f"expected the sensor frame {sensor_frame!r} (state the readings' frame with "
-            "--wrench-frame)"
+            f"expected the sensor frame {sensor_frame!r} (state the readings' frame as "
+            "wrench_frame)",
+            field="wrench_frame",
         )
     if frame == sensor_frame:
         note = f"readings in the sensor frame {sensor_frame!r}"

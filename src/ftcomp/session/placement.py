@@ -52,11 +52,16 @@ from scipy import signal
 
 from ftcomp import paper
 from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.config_fields import check_fields, param
 from ftcomp.control.controller import AdmittanceController
 from ftcomp.control.filters import LowPassFilter
 from ftcomp.control.laws import CombinedLaw, selection_matrix
 from ftcomp.control.loop import ControlCycle, Reading, run_loop
-from ftcomp.control.safety import SafetyLimits
+from ftcomp.control.safety import (
+    MAX_ROTATION_ACCEL_RAD_S2,
+    MAX_ROTATION_SPEED_RAD_S,
+    SafetyLimits,
+)
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 from ftcomp.model import GravityModel
@@ -66,6 +71,7 @@ from ftcomp.session.verdicts import judge_placement
 __all__ = [
     "COLUMNS",
     "DEFAULT_GAINS",
+    "PLACEMENT_CONTROLS",
     "ContactWrench",
     "PlacementCell",
     "PlacementConfig",
@@ -79,6 +85,8 @@ __all__ = [
 ]
 
 PlacementControl = Literal["position", "admittance"]
+#: The controllers of a placement run.
+PLACEMENT_CONTROLS: tuple[PlacementControl, ...] = ("position", "admittance")
 
 #: Admittance gains (K1 [m/N], K2 [m/(s*N)]) that place 500 g gently on each surface of the
 #: simulated cell. The book's contact (with the arm's servo) is ~1.5e5 N/m stiff: the K1 term
@@ -140,59 +148,48 @@ class PlacementConfig:
         retract_m: lift after releasing [m].
     """
 
-    control: PlacementControl
+    control: PlacementControl = param(choices=PLACEMENT_CONTROLS, help="the controller")
     compensation: bool = True
-    k1_m_per_N: float = 1e-4
-    k2_m_per_s_N: float = 1e-3
-    filter_cutoff_hz: float = 20.0
-    decision_cutoff_hz: float = 2.0
-    band_N: float = 0.05
-    settle_time_s: float = 0.3
-    gentle_press_N: float = 0.25
-    approach_gap_m: float = 0.002
-    position_speed_m_per_s: float = 0.004
-    position_depth_m: float = 0.0045
-    travel_margin_m: float = 0.008
-    max_force_N: float = 40.0
-    max_speed_m_per_s: float = 0.02
-    max_accel_m_per_s2: float = 0.5
-    stale_after_s: float = 0.005
-    max_identical_samples: int = 50
-    sensor_range_N: float = paper.SENSOR["force_range_N"]
-    sensor_range_Nm: float = paper.SENSOR["torque_range_Nm"]
-    max_duration_s: float = 30.0
-    hold_s: float = 0.2
-    retract_m: float = 0.01
+    k1_m_per_N: float = param(1e-4, ge=0.0, unit="m/N", help="K1 on the gravity axis")
+    k2_m_per_s_N: float = param(1e-3, ge=0.0, unit="m/(s*N)", help="K2 on the gravity axis")
+    filter_cutoff_hz: float = param(
+        20.0, gt=0.0, unit="Hz", help="low-pass of the wrench fed to the law"
+    )
+    decision_cutoff_hz: float = param(
+        2.0, gt=0.0, unit="Hz", help="low-pass of the placement decision"
+    )
+    band_N: float = param(0.05, gt=0.0, unit="N", help="placed within this force along gravity")
+    settle_time_s: float = param(0.3, gt=0.0, unit="s", help="... for this long")
+    gentle_press_N: float = param(
+        0.25, gt=0.0, unit="N", help="the verdict's tolerance on the true contact"
+    )
+    approach_gap_m: float = param(0.002, gt=0.0, unit="m", help="clearance at the start")
+    position_speed_m_per_s: float = param(
+        0.004, gt=0.0, unit="m/s", help="descent speed of the position-only mode"
+    )
+    position_depth_m: float = param(
+        0.0045, ge=0.0, unit="m", help="position-only end point below the surface top"
+    )
+    travel_margin_m: float = param(0.008, gt=0.0, unit="m", help="travel beyond the gap")
+    max_force_N: float = param(40.0, gt=0.0, unit="N", help="protective stop above")
+    max_speed_m_per_s: float = param(0.02, gt=0.0, unit="m/s", help="speed limit")
+    max_accel_m_per_s2: float = param(0.5, gt=0.0, unit="m/s^2", help="acceleration limit")
+    stale_after_s: float = param(0.005, gt=0.0, unit="s", help="a reading older than this stops")
+    max_identical_samples: int = param(
+        50, ge=1, integer=True, help="identical fresh readings that count as a frozen sensor"
+    )
+    sensor_range_N: float = param(
+        paper.SENSOR["force_range_N"], gt=0.0, unit="N", help="the sensor's force range"
+    )
+    sensor_range_Nm: float = param(
+        paper.SENSOR["torque_range_Nm"], gt=0.0, unit="N*m", help="the sensor's torque range"
+    )
+    max_duration_s: float = param(30.0, gt=0.0, unit="s", help="give up after this long")
+    hold_s: float = param(0.2, ge=0.0, unit="s", help="recorded after the decision")
+    retract_m: float = param(0.01, ge=0.0, unit="m", help="lift after releasing")
 
     def __post_init__(self) -> None:
-        if self.control not in ("position", "admittance"):
-            raise ParameterError(
-                f"control must be 'position' or 'admittance', got {self.control!r}"
-            )
-        for name in ("k1_m_per_N", "k2_m_per_s_N", "hold_s", "retract_m", "position_depth_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0.0):
-                raise ParameterError(f"{name} must be finite and >= 0, got {value}")
-        for name in (
-            "filter_cutoff_hz",
-            "decision_cutoff_hz",
-            "band_N",
-            "settle_time_s",
-            "gentle_press_N",
-            "approach_gap_m",
-            "position_speed_m_per_s",
-            "travel_margin_m",
-            "max_force_N",
-            "max_speed_m_per_s",
-            "max_accel_m_per_s2",
-            "stale_after_s",
-            "sensor_range_N",
-            "sensor_range_Nm",
-            "max_duration_s",
-        ):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ParameterError(f"{name} must be finite and > 0, got {value}")
+        check_fields(self)
 
 
 @dataclass(frozen=True)
@@ -232,8 +229,8 @@ def safety_limits(config: PlacementConfig) -> SafetyLimits:
     if config.control != "admittance":
         max_travel_z += config.position_depth_m
     return SafetyLimits(
-        max_twist=np.array([config.max_speed_m_per_s] * 3 + [0.5] * 3),
-        max_twist_rate=np.array([config.max_accel_m_per_s2] * 3 + [5.0] * 3),
+        max_twist=np.array([config.max_speed_m_per_s] * 3 + [MAX_ROTATION_SPEED_RAD_S] * 3),
+        max_twist_rate=np.array([config.max_accel_m_per_s2] * 3 + [MAX_ROTATION_ACCEL_RAD_S2] * 3),
         max_travel=np.array([0.005, 0.005, max_travel_z, 0.1, 0.1, 0.1]),
         max_force_N=config.max_force_N,
         max_torque_Nm=config.max_force_N * 0.2,

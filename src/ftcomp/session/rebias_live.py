@@ -22,11 +22,21 @@ from numpy.typing import NDArray
 
 from ftcomp.calibration.rebias import bias_of, rebias
 from ftcomp.calibration_record import Calibration
+from ftcomp.config_fields import FieldSpec, check_value
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 from ftcomp.samples import Samples
 
-__all__ = ["MOVED_M", "TURNED_RAD", "Rebiased", "rebias_still"]
+__all__ = ["MOVED_M", "REBIAS_DURATION", "TURNED_RAD", "Rebiased", "rebias_still"]
+
+#: The rule of a re-bias's duration [s]: any time to average the noise over, up to a minute (a
+#: bias read over longer has drifted while it was read).
+REBIAS_DURATION: Final = FieldSpec(
+    help="how long to read with the arm still and nothing touching the tool",
+    unit="s",
+    gt=0.0,
+    le=60.0,
+)
 
 #: How far the sensor may move [m] and turn [rad] while the bias is read: further, and the
 #: arm was not still.
@@ -76,19 +86,19 @@ def rebias_still(
         robot: the arm (entered), still; it is not moved.
         sensor: the F/T sensor (entered), on the robot's clock.
         calibration: the calibration to re-bias (its tool model, tilt and mount are kept).
-        duration_s: how long to read [s], > 0 (on the robot's clock).
+        duration_s: how long to read [s], in (0, 60] (:data:`REBIAS_DURATION`; on the robot's
+            clock).
         mount: the sensor frame on the TCP (identity by default), as the loop's.
 
     Returns:
         The re-biased calibration and what changed.
 
     Raises:
-        ParameterError: a duration that is not > 0, a robot that reports no pose.
+        ParameterError: a duration out of its range, a robot that reports no pose.
         HardwareError: the arm moved more than :data:`MOVED_M` or turned more than
             :data:`TURNED_RAD` while reading, or the sensor is silent.
     """
-    if not (math.isfinite(duration_s) and duration_s > 0.0):
-        raise ParameterError(f"the re-bias duration must be > 0 s, got {duration_s:g}")
+    check_value("duration_s", REBIAS_DURATION, duration_s)
     if not robot.pose_known:
         raise ParameterError("re-biasing needs the sensor's pose: the robot reports none")
     mount = mount if mount is not None else Mount()

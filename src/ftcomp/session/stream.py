@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.bias_tracking import BiasTracker, BiasTrackingConfig
 from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.config_fields import check_fields, param
 from ftcomp.control.loop import ControlCycle, Reading, loop_clock, run_loop
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import quat_from_matrix
@@ -168,25 +169,30 @@ class StreamConfig:
             with ``online_load``); None: the calibration's bias.
     """
 
-    duration_s: float
+    duration_s: float = param(gt=0.0, unit="s", help="how long to log")
     with_pose: bool = True
     online_load: bool = False
-    online_rate_hz: float | None = None
-    progress_period_s: float = 0.25
+    online_rate_hz: float | None = param(
+        None,
+        gt=0.0,
+        le=100_000.0,
+        optional=True,
+        unit="Hz",
+        help="the sensor's sample rate, which times the grasp detector's windows",
+    )
+    progress_period_s: float = param(0.25, gt=0.0, unit="s", help="how often to call on_progress")
     track_bias: BiasTrackingConfig | None = None
 
     def __post_init__(self) -> None:
-        for name in ("duration_s", "progress_period_s"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ParameterError(f"{name} must be > 0, got {value:g}")
-        rate = self.online_rate_hz
-        if rate is not None and not self.online_load:
-            raise ParameterError("online_rate_hz needs online_load")
-        if rate is not None and not (math.isfinite(rate) and 0.0 < rate <= 100_000.0):
-            raise ParameterError(f"online_rate_hz must be in (0, 100000] Hz, got {rate:g}")
+        check_fields(self)
+        if self.online_rate_hz is not None and not self.online_load:
+            raise ParameterError(
+                "online_rate_hz needs online_load", field=("online_rate_hz", "online_load")
+            )
         if self.track_bias is not None and self.online_load:
-            raise ParameterError("track the bias or weigh a load online, not both")
+            raise ParameterError(
+                "track_bias and online_load: choose one", field=("track_bias", "online_load")
+            )
 
 
 @dataclass(frozen=True)

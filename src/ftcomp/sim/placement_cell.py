@@ -68,9 +68,13 @@ class SimPlacementCell:
         arm: ArmModel | None = None,
     ) -> None:
         if surface not in PLACEMENT_SURFACES:
-            raise ParameterError(f"surface must be 'sponge' or 'book', got {surface!r}")
+            raise ParameterError(
+                f"surface must be 'sponge' or 'book', got {surface!r}", field="surface"
+            )
         if not (math.isfinite(load_kg) and load_kg > 0.0):
-            raise ParameterError(f"load_kg must be > 0, got {load_kg}")
+            raise ParameterError(f"load_kg must be > 0, got {load_kg}", field="load_kg")
+        if seed is not None and not (isinstance(seed, int) and seed >= 0):
+            raise ParameterError(f"seed must be an integer >= 0, got {seed!r}", field="seed")
         load = LoadSpec(load_kg)
         self._weight_N = load.weight_N
         scene = SceneConfig(

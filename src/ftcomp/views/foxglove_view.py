@@ -98,7 +98,9 @@ def parse_address(address: str) -> tuple[str, int]:
     """
     host, _, port = address.rpartition(":")
     if not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise ParameterError(f"--view: expected HOST:PORT with a port 1..65535, got {address!r}")
+        raise ParameterError(
+            f"address: expected HOST:PORT with a port 1..65535, got {address!r}", field="address"
+        )
     return host.strip("[]"), int(port)
 
 
@@ -132,7 +134,10 @@ class FoxgloveView:
         try:
             import foxglove
         except ImportError:
-            raise ParameterError("--view needs foxglove-sdk: pip install 'ftcomp[view]'") from None
+            raise ParameterError(
+                "a view at an address needs foxglove-sdk: pip install 'ftcomp[view]'",
+                field="address",
+            ) from None
         self._fox = foxglove
         self.host, self.port = parse_address(address)
         self.base_frame, self.sensor_frame = base_frame, sensor_frame
@@ -143,7 +148,9 @@ class FoxgloveView:
                 name=name, host=self.host, port=self.port, context=self._context
             )
         except Exception as exc:  # the SDK raises its own errors for a taken port, a bad host
-            raise ParameterError(f"--view {address}: cannot serve there: {exc}") from None
+            raise ParameterError(
+                f"address {address}: cannot serve there: {exc}", field="address"
+            ) from None
         self.layout = RowLayout(())
         self._channels: dict[str, Any] = {}
         self._load: Any = None
