@@ -437,11 +437,11 @@ class TwinTruth:
     def __init__(self, samples: Samples, seed: int, tilt_deg: tuple[float, float]) -> None:
         from scipy.optimize import minimize_scalar
 
+        from ftcomp.sim.cell_config import CellConfig
         from ftcomp.twin.serve import TwinConfig
 
-        config = TwinConfig(
-            "127.0.0.1", "127.0.0.2", 1.0, realistic_drift=1.0, seed=seed, tilt_deg=tilt_deg
-        )
+        cell_config = CellConfig(realistic_drift=1.0, seed=seed, tilt_deg=tilt_deg)
+        config = TwinConfig("127.0.0.1", "127.0.0.2", 1.0, cell=cell_config)
         cell = config.open_cell()  # the cell alone: nothing is bound
         self.model, self._sensor = cell.true_gravity_model(), cell.sensor
         self.rate_hz = self._sensor.spec.output_rate_Hz

@@ -17,10 +17,10 @@ BASE = ("twin", "--robot-host", "127.0.0.5", "--sensor-host", "127.0.0.6", "--se
         (("--robot-host", "10.0.0.1"), "outside 127.0.0.0/8"),
         (("--robot", "ur10"), "unknown 'ur10'"),
         (("--surface", "glass"), "unknown 'glass'"),
-        (("--load-kg", "100"), "load_kg must be"),
+        (("--load-kg", "100"), "--load-kg must be"),
         (("--tcp-offset-mm", "1,2"), "--tcp-offset-mm"),
-        (("--tcp-offset-mm", "0,0,nan"), "tcp_offset_mm must be"),
-        (("--tcp-rotvec-rad", "4,0,0"), "tcp_rotvec_rad must be"),
+        (("--tcp-offset-mm", "0,0,nan"), "--tcp-offset-mm must be"),
+        (("--tcp-rotvec-rad", "4,0,0"), "--tcp-rotvec-rad must be"),
     ],
 )
 def test_twin_refuses_bad_input_in_one_line_with_exit_2(

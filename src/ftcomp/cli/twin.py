@@ -22,6 +22,7 @@ import argparse
 from pathlib import Path
 
 from ftcomp.cli.live_status import view_address
+from ftcomp.cli.options import map_field
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.devices import devices, twin_faces
 
@@ -148,39 +149,63 @@ def register(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="do not ask for real-time priority (default: SCHED_FIFO where allowed)",
     )
+    # The cell's fields a library error names, by the flag that set them.
+    for field, flag in (
+        ("p_flange_sensor_m", "--tcp-offset-mm"),
+        ("rotvec_flange_sensor_rad", "--tcp-rotvec-rad"),
+        ("tilt_deg", "--tilt-deg"),
+        ("load_kg", "--load-kg"),
+        ("clearance_mm", "--clearance-mm"),
+        ("gain_error_percent", "--gain-error-percent"),
+        ("realistic_drift", "--realistic-drift"),
+        ("drift_N_per_min", "--drift-N-per-min"),
+        ("sensor_rate_hz", "--sensor-rate-hz"),
+        ("fault_at_s", "--fault-at-s"),
+        ("robot_host", "--robot-host"),
+        ("sensor_host", "--sensor-host"),
+    ):
+        map_field(parser, field, flag)
     parser.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Serve the twin; 0 when it ran its time or was stopped by a signal."""
-    from ftcomp.twin import TwinConfig, serve_twin
+    from ftcomp.sim.cell_config import CellConfig
+    from ftcomp.twin.serve import TwinConfig, face_arm, serve_twin
 
     tilt = _floats(args.tilt_deg, 2, "--tilt-deg")
     drift = _floats(args.drift_N_per_min, 3, "--drift-N-per-min")
     offset = _floats(args.tcp_offset_mm, 3, "--tcp-offset-mm")
     rotvec = _floats(args.tcp_rotvec_rad, 3, "--tcp-rotvec-rad")
+    surface = args.surface
+    arm = face_arm(args.robot) if args.robot in twin_faces("robot") else None
+    cell = CellConfig(
+        **({"arm": arm} if arm is not None else {}),  # type: ignore[arg-type]
+        load_kg=args.load_kg,
+        grasp=args.load_kg is not None,
+        surface=surface,
+        clearance_mm=args.clearance_mm if args.load_kg is not None and surface != "none" else None,
+        tilt_deg=(tilt[0], tilt[1]),
+        seed=args.seed,
+        gain_error_percent=args.gain_error_percent,
+        realistic_drift=args.realistic_drift,
+        drift_N_per_min=(drift[0], drift[1], drift[2]),
+        p_flange_sensor_m=(offset[0] * 1e-3, offset[1] * 1e-3, offset[2] * 1e-3),
+        rotvec_flange_sensor_rad=(rotvec[0], rotvec[1], rotvec[2]),
+    )
     config = TwinConfig(
         robot_host=args.robot_host,
         sensor_host=args.sensor_host,
         seconds=args.seconds,
         robot=args.robot,
         sensor=args.sensor,
-        load_kg=args.load_kg,
-        surface=args.surface,
-        clearance_mm=args.clearance_mm,
-        tilt_deg=(tilt[0], tilt[1]),
-        seed=args.seed,
-        gain_error_percent=args.gain_error_percent,
-        realistic_drift=args.realistic_drift,
-        drift_N_per_min=(drift[0], drift[1], drift[2]),
+        cell=cell,
         truth_path=Path(args.truth) if args.truth else None,
         contact_log_path=Path(args.contact_log) if args.contact_log else None,
         sensor_rate_hz=args.sensor_rate_hz,
         fault=args.fault,
         fault_at_s=args.fault_at_s,
         realtime=not args.no_realtime,
-        tcp_offset_mm=(offset[0], offset[1], offset[2]),
-        tcp_rotvec_rad=(rotvec[0], rotvec[1], rotvec[2]),
     )
     observers = []
     if args.view:

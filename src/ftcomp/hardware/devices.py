@@ -90,6 +90,8 @@ class TwinFace:
         factory: ``"module:Class"`` of the face (:mod:`ftcomp.twin.faces` says what it
             implements), imported when a twin serves it.
         faults: the faults it injects on demand.
+        arm: a robot face's arm, ``"module:function"`` returning the simulated cell's arm
+            (:mod:`ftcomp.sim.arm`; a seven-joint arm is data), or None: the cell's default.
         rate_hz: a sensor face's default output rate [Hz] (None: the simulated sensor's).
         max_rate_hz: a sensor face's fastest output rate [Hz] (None: no other limit).
         requires: modules the live backend needs to drive this face (the conformance suite
@@ -101,6 +103,7 @@ class TwinFace:
     name: str
     factory: str
     faults: tuple[Fault, ...] = ()
+    arm: str | None = None
     rate_hz: float | None = None
     max_rate_hz: float | None = None
     requires: tuple[str, ...] = ()
@@ -192,6 +195,7 @@ BUILT_IN: Final[tuple[Device, ...]] = (
                     None,
                 ),
             ),
+            arm="ftcomp.sim.arm:ur5e_arm",
             requires=("rtde_control", "rtde_receive"),
             record_options="max_speed_mm_s=250&max_accel_mm_s2=1500",
         ),

@@ -15,7 +15,6 @@ from __future__ import annotations
 import contextlib
 import csv
 import dataclasses
-import gc
 import ipaddress
 import math
 import signal
@@ -23,28 +22,23 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Final
 
 import numpy as np
 
-from ftcomp.control.timing import LoopTiming, TimingSummary
 from ftcomp.errors import ParameterError
 from ftcomp.frames import rotvec_from_matrix
 from ftcomp.hardware.devices import Device, Fault, load_target, twin_faces
-from ftcomp.hardware.pacing import realtime_loop
-from ftcomp.hardware.registry import parse_uri
+from ftcomp.hardware.pacing import LoopClock, TimingSummary
 from ftcomp.io.atomic import atomic_output, atomic_write_text
 from ftcomp.io.truth_json import truth_document
 from ftcomp.session.log import LogObserver, ObserverThread
-from ftcomp.sim.arm import ur5e_arm
-from ftcomp.sim.backend import MAX_LOAD_KG, sensor_spec_from_uri
-from ftcomp.sim.cell import COLLECTION_POSITION_BASE_M, SimCell
-from ftcomp.sim.scene import SceneConfig
+from ftcomp.sim.arm import ArmModel
+from ftcomp.sim.cell import SimCell
+from ftcomp.sim.cell_config import CellConfig
 from ftcomp.sim.sensor import SensorSpec, SimWrenchSensor
-from ftcomp.sim.surfaces import SURFACE_KINDS
-from ftcomp.sim.tool import LoadSpec
 from ftcomp.twin.faces import RobotFace, SensorFace
 from ftcomp.twin.netft import RT_PRIORITY
 
@@ -52,6 +46,7 @@ __all__ = [
     "CONTACT_LOG_COLUMNS",
     "TwinConfig",
     "TwinResult",
+    "face_arm",
     "pair_faults",
     "serve_twin",
 ]
@@ -61,6 +56,18 @@ __all__ = [
 CONTACT_LOG_COLUMNS: Final = (
     "t_s", "fx", "fy", "fz", "tx", "ty", "tz", "x", "y", "z", "rx", "ry", "rz", "safety",
 )  # fmt: skip
+
+#: The loop starts its schedule again once it is this far behind (a stall) [s]: a period's
+#: lateness is caught up, a stall's is not.
+_RESTART_AFTER_S: Final = 0.05
+
+
+def face_arm(robot: str) -> ArmModel | None:
+    """The simulated arm of a robot face (None: the cell's default arm); build a
+    :class:`~ftcomp.sim.cell_config.CellConfig` for the twin with it, since where a sensor may
+    sit on the flange depends on the arm."""
+    arm = twin_faces("robot")[robot].twin.arm  # type: ignore[union-attr]
+    return None if arm is None else load_target(arm)()
 
 
 def pair_faults(robot: str, sensor: str) -> dict[str, Fault]:
@@ -84,27 +91,14 @@ class TwinConfig:
         seconds: serve this long [s] (or until SIGTERM / Ctrl-C).
         robot: the robot face (a twin face of :mod:`ftcomp.hardware.devices`: ``ur5e``).
         sensor: the sensor face (``netft``).
-        load_kg: a load held in the gripper [kg] (None: no load).
-        surface: what lies on the table (``none``, ``sponge``, ``book``).
-        clearance_mm: with a load and a surface, start holding it this far above [mm].
-        tilt_deg: base mounting tilt ``(U, V)`` [deg].
-        seed: the sensor noise's seed (the same options give the same readings).
-        gain_error_percent: the sensor's gain error on every axis [%].
-        realistic_drift: a real sensor's bias drift (wander and warm-up) times this, 0: none.
-        drift_N_per_min: force-bias drift rate, x y z [N/min].
+        cell: the simulated cell: tool, load and surface, base tilt, the sensor's realism and
+            where it sits on the flange (:class:`~ftcomp.sim.cell_config.CellConfig`; a UR's
+            TCP offset is the sensor's offset on the flange). Its arm is the robot face's.
         truth_path: write the true tool, bias, tilt and mount here (JSON), or None.
         contact_log_path: write the contact log here (CSV), or None.
-        fault: a fault of :data:`FAULTS` to inject, or None.
-        fault_at_s: when, after the first RTDE client started streaming [s].
-        realtime: ask for SCHED_FIFO for the loop and the Net F/T's sender (as ur_rtde does).
-        tcp_offset_mm: the controller's TCP offset, the TCP origin in the flange frame [mm]
-            (PolyScope's Installation > TCP). The TCP is the wrist sensor's frame: the cell
-            mounts the sensor on the UR5e's flange (DH frame 6) at this offset, so
-            ``actual_TCP_pose`` is the flange's pose (UR's DH forward kinematics) times it,
-            ``actual_TCP_force`` is reported about the flange origin and ``ft_raw_wrench`` in
-            the flange frame, as an e-Series does.
-        tcp_rotvec_rad: the TCP offset's rotation (TCP axes in the flange frame), a rotation
-            vector [rad].
+        fault: a fault one of the two faces declares, or None.
+        fault_at_s: when, after the first client started streaming from the robot [s].
+        realtime: ask for SCHED_FIFO for the loop and the faces' senders (as ur_rtde does).
         sensor_rate_hz: the sensor face's output rate [Hz] (None: the face's default, or the
             simulated sensor's), within the face's fastest; each sample a fresh draw (noise
             and quantisation) of the contact wrench held between physics steps.
@@ -115,21 +109,12 @@ class TwinConfig:
     seconds: float
     robot: str = "ur5e"
     sensor: str = "netft"
-    load_kg: float | None = None
-    surface: str = "none"
-    clearance_mm: float = 5.0
-    tilt_deg: tuple[float, float] = (0.0, 0.0)
-    seed: int = 0
-    gain_error_percent: float = 0.0
-    realistic_drift: float = 0.0
-    drift_N_per_min: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    cell: CellConfig = field(default_factory=CellConfig)
     truth_path: Path | None = None
     contact_log_path: Path | None = None
     fault: str | None = None
     fault_at_s: float = 1.0
     realtime: bool = True
-    tcp_offset_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    tcp_rotvec_rad: tuple[float, float, float] = (0.0, 0.0, 0.0)
     sensor_rate_hz: float | None = None
 
     def __post_init__(self) -> None:
@@ -149,18 +134,6 @@ class TwinConfig:
             faces = twin_faces(kind)  # type: ignore[arg-type]
             if name not in faces:
                 raise ParameterError(f"{kind}: unknown {name!r}; known: {', '.join(faces)}")
-        if self.surface not in SURFACE_KINDS:
-            raise ParameterError(
-                f"surface: unknown {self.surface!r}; known: {', '.join(SURFACE_KINDS)}"
-            )
-        if self.load_kg is not None and not (
-            math.isfinite(self.load_kg) and 0.0 < self.load_kg <= MAX_LOAD_KG
-        ):
-            raise ParameterError(f"load_kg must be in (0, {MAX_LOAD_KG}] kg, got {self.load_kg}")
-        if not (math.isfinite(self.clearance_mm) and 0.0 <= self.clearance_mm <= 100.0):
-            raise ParameterError(f"clearance_mm must be in [0, 100], got {self.clearance_mm}")
-        if any(not math.isfinite(t) or abs(t) >= 30.0 for t in self.tilt_deg):
-            raise ParameterError(f"tilt_deg must be within +-30 deg, got {self.tilt_deg}")
         faults = pair_faults(self.robot, self.sensor)
         if self.fault is not None and self.fault not in faults:
             raise ParameterError(
@@ -169,25 +142,6 @@ class TwinConfig:
             )
         if not (math.isfinite(self.fault_at_s) and self.fault_at_s >= 0.0):
             raise ParameterError(f"fault_at_s must be >= 0, got {self.fault_at_s}")
-        if self.seed < 0:
-            raise ParameterError(f"seed must be >= 0, got {self.seed}")
-        if not (math.isfinite(self.gain_error_percent) and abs(self.gain_error_percent) < 50.0):
-            raise ParameterError("gain_error_percent must be within +-50 %")
-        if not (math.isfinite(self.realistic_drift) and 0.0 <= self.realistic_drift <= 100.0):
-            raise ParameterError(f"realistic_drift must be in 0 .. 100, got {self.realistic_drift}")
-        if len(self.tcp_offset_mm) != 3 or any(
-            not math.isfinite(v) or abs(v) > 500.0 for v in self.tcp_offset_mm
-        ):
-            raise ParameterError(
-                f"tcp_offset_mm must be 3 values within +-500, got {self.tcp_offset_mm}"
-            )
-        if len(self.tcp_rotvec_rad) != 3 or not (
-            all(math.isfinite(v) for v in self.tcp_rotvec_rad)
-            and math.hypot(*self.tcp_rotvec_rad) <= math.pi
-        ):
-            raise ParameterError(
-                f"tcp_rotvec_rad must be 3 values of norm <= pi, got {self.tcp_rotvec_rad}"
-            )
         most = self.sensor_face().twin.max_rate_hz  # type: ignore[union-attr]
         rate = self.sensor_rate_hz
         if rate is not None and not (
@@ -214,48 +168,14 @@ class TwinConfig:
         default = self.sensor_face().twin.rate_hz  # type: ignore[union-attr]
         return default if default is not None else SensorSpec().output_rate_Hz
 
-    def sim_uri(self) -> str:
-        """The ``sim://`` URI of the cell this twin serves, but for the arm (a ``sim://``
-        cell carries the C4-like arm, the twin the UR5e: :meth:`open_cell`)."""
-        parts = [f"tilt_deg={self.tilt_deg[0]:g},{self.tilt_deg[1]:g}", f"seed={self.seed}"]
-        if self.load_kg is not None:
-            parts += [f"load_kg={self.load_kg:g}", "grasp=1"]
-            if self.surface != "none":
-                parts.append(f"clearance_mm={self.clearance_mm:g}")
-        parts.append(f"surface={self.surface}")
-        if self.gain_error_percent:
-            parts.append(f"gain_error_percent={self.gain_error_percent:g}")
-        if self.realistic_drift:
-            parts.append(f"realistic_drift={self.realistic_drift:g}")
-        if any(self.drift_N_per_min):
-            parts.append("drift_N_per_min=" + ",".join(f"{v:g}" for v in self.drift_N_per_min))
-        return "sim://?" + "&".join(parts)
+    def cell_config(self) -> CellConfig:
+        """The cell served: :attr:`cell` with the robot face's arm."""
+        arm = face_arm(self.robot)
+        return self.cell if arm is None else dataclasses.replace(self.cell, arm=arm)
 
     def open_cell(self) -> SimCell:
-        """The cell this twin serves: the UR5e with the wrist sensor at the TCP offset, the
-        sensor's realism, and a load grasped (held ``clearance_mm`` above a surface)."""
-        spec = sensor_spec_from_uri(parse_uri(self.sim_uri()))
-        scene = SceneConfig(
-            tilt_U_rad=math.radians(self.tilt_deg[0]),
-            tilt_V_rad=math.radians(self.tilt_deg[1]),
-            load=LoadSpec(self.load_kg) if self.load_kg is not None else None,
-            surface=self.surface,  # type: ignore[arg-type]
-            arm=ur5e_arm(),
-            p_flange_sensor_m=tuple(v * 1e-3 for v in self.tcp_offset_mm),  # type: ignore[arg-type]
-            rotvec_flange_sensor_rad=self.tcp_rotvec_rad,
-        )
-        cell = SimCell(scene, spec, seed=self.seed)
-        if any(self.tcp_offset_mm) or any(self.tcp_rotvec_rad):
-            # The sensor (the TCP) at the start pose whatever the offset: tool down in front.
-            cell.move_pose(COLLECTION_POSITION_BASE_M, np.diag([1.0, -1.0, -1.0]), 0.5)
-        if self.load_kg is not None:
-            clearance_m = self.clearance_mm * 1e-3
-            if self.surface != "none":  # grasp 20 mm up (empty on the way), then lower
-                cell.hold_above_surface(max(clearance_m, 0.02), 0.5)
-            cell.grasp()
-            if self.surface != "none":
-                cell.hold_above_surface(clearance_m, 0.3)
-        return cell
+        """The cell this twin serves (nothing is bound)."""
+        return self.cell_config().open_cell()
 
 
 @dataclass(frozen=True)
@@ -349,18 +269,21 @@ class _Twin:
                 face.inject(fault)
 
     def run(self, seconds: float, stop: threading.Event, log: Any) -> TwinResult:
-        timing = LoopTiming(self.robot.period_s, name="ftcomp twin")
-        # The cell's set-up (MuJoCo, numpy, scipy) is frozen out of the collector: a full
-        # collection over it took 30-40 ms, a stall that starved the sensor's stream.
-        gc.collect()
-        gc.freeze()
-        # As every live loop of ftcomp (hardware.pacing): SCHED_FIFO for the loop, and for the
-        # process's other threads (the faces' sessions and ports) a low real-time priority, so
-        # that none is preempted by an ordinary process while it holds the interpreter's lock
-        # (which stalled the cell's loop behind it).
-        with realtime_loop(RT_PRIORITY, realtime=self.config.realtime) as timing.realtime:
-            reason = self._cycles(seconds, stop, log, timing)
-        summary = timing.summary()
+        # As every live loop of ftcomp (hardware.pacing.LoopClock): the set-up (MuJoCo, numpy,
+        # scipy) frozen out of the collector (a full collection over it took 30-40 ms, a stall
+        # that starved the sensor's stream), collection in the slack, SCHED_FIFO for the loop
+        # and a low real-time priority for the faces' threads, so that none is preempted by an
+        # ordinary process while it holds the interpreter's lock (which stalled the loop).
+        clock = LoopClock(
+            self.robot.period_s,
+            name="ftcomp twin",
+            priority=RT_PRIORITY,
+            realtime=self.config.realtime,
+            restart_after_s=_RESTART_AFTER_S,
+        )
+        with clock:
+            reason = self._cycles(seconds, stop, log, clock)
+        summary = clock.summary()
         self.robot.close()
         self.sensor.close()
         return TwinResult(
@@ -369,18 +292,15 @@ class _Twin:
             robot_served=self.robot.served(),
             sensor_served=self.sensor.served(),
             reason=reason,
-            realtime=timing.realtime,
+            realtime=clock.realtime,
             timing=summary,
         )
 
-    def _cycles(self, seconds: float, stop: threading.Event, log: Any, timing: LoopTiming) -> str:
+    def _cycles(self, seconds: float, stop: threading.Event, log: Any, clock: LoopClock) -> str:
         """The cell's loop until ``seconds`` pass or ``stop`` is set; why it ended."""
         cell, robot, sensor = self.cell, self.robot, self.sensor
-        period_s = robot.period_s
-        steps = max(1, round(period_s / cell.control_period_s))
+        steps = max(1, round(robot.period_s / cell.control_period_s))
         start = time.monotonic()
-        due = start
-        reason = "time"
         # The sensor's samples at its face's rate (the cell's sensor when the rates agree):
         # each physics step's wrench held for the ticks until the next, every tick a fresh draw.
         rate_hz = self.config.rate_hz()
@@ -391,18 +311,17 @@ class _Twin:
                 dataclasses.replace(cell.sensor.spec, output_rate_Hz=rate_hz),
                 cell.ideal_wrench_sensor,
                 cell.time,
-                seed=self.config.seed,
+                seed=self.config.cell.seed,
             )
         )
         last_wrench = cell.sensor.read().wrench_sensor
         while True:
             now = time.monotonic()
             if stop.is_set():
-                reason = "signal"
-                break
+                return "signal"
             if now - start >= seconds:
-                break
-            timing.start()
+                return "time"
+            clock.start()
             self._fire_fault(now)
             w_contact = cell.true_contact_wrench_base(cell.sensor_pose()[0])
             cell.command_twist(robot.cycle(float(np.linalg.norm(w_contact[:3]))))
@@ -425,14 +344,8 @@ class _Twin:
                         robot.safety(),
                     ]
                 )
-            timing.sent()
-            due += period_s
-            wait = due - time.monotonic()
-            if wait > 0:
-                time.sleep(wait)
-            elif wait < -0.05:  # far behind (a stall): start the schedule again
-                due = time.monotonic()
-        return reason
+            clock.sent()
+            clock.wait()
 
 
 def _open_faces(config: TwinConfig, cell: SimCell) -> tuple[RobotFace, SensorFace]:
@@ -445,7 +358,7 @@ def _open_faces(config: TwinConfig, cell: SimCell) -> tuple[RobotFace, SensorFac
     )
     try:
         robot: RobotFace = load_target(robot_device.twin.factory)(
-            config.robot_host, cell, realtime=config.realtime, seed=config.seed
+            config.robot_host, cell, realtime=config.realtime, seed=config.cell.seed
         )
     except BaseException:
         sensor.close()
@@ -485,13 +398,9 @@ def serve_twin(
 
             document = truth_document(cell.true_gravity_model())
             document["mount"] = {"R_tcp_sensor": np.eye(3).tolist(), "p_tcp_sensor_m": [0, 0, 0]}
-            document["twin"] = {
-                "robot": config.robot,
-                "sensor": config.sensor,
-                "sim_uri": config.sim_uri(),
-                "tcp_offset_mm": list(config.tcp_offset_mm),
-                "tcp_rotvec_rad": list(config.tcp_rotvec_rad),
-            }
+            cell_fields = dataclasses.asdict(dataclasses.replace(config.cell, arm=None))  # type: ignore[arg-type]
+            del cell_fields["arm"]
+            document["twin"] = {"robot": config.robot, "sensor": config.sensor, "cell": cell_fields}
             atomic_write_text(config.truth_path, json.dumps(document, indent=2) + "\n")
         if threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGTERM, signal.SIGINT):
