@@ -205,3 +205,16 @@ def test_a_held_load_on_the_fr3_adds_its_weight() -> None:
     truth = cell.true_gravity_model()
     error = cell.sensor.read().wrench_sensor - truth.predict(cell.sensor_pose()[1])
     assert np.abs(error[:3]).max() < 1e-5 and np.abs(error[3:]).max() < 1e-6
+
+
+def test_a_calibration_on_the_fr3_cell_recovers_its_truth_within_three_standard_errors() -> None:
+    from ftcomp.calibration.identify import calibrate, deviations_in_standard_errors
+    from ftcomp.paper import paper_poses
+    from ftcomp.sim.collect import record_with_truth
+
+    cell = CellConfig(arm=fr3_arm(), tilt_deg=(-0.204, -0.129), seed=12).open_cell()
+    data, truth = record_with_truth(cell, paper_poses(), 500)  # the paper's nine poses, reached
+    deviations = deviations_in_standard_errors(calibrate(data, method="joint"), truth)
+    # At the paper's noise level (one count) each estimate is off by noise alone: 3 SE.
+    worst = max(deviations, key=deviations.__getitem__)
+    assert deviations[worst] < 3.0, f"{worst} is {deviations[worst]:.2f} SE off: {deviations}"
