@@ -21,10 +21,10 @@ import ftcomp.sim.backend
 from ftcomp.calibration.identify import calibrate
 from ftcomp.cli import main
 from ftcomp.cli.stream import _MEASURE_S
-from ftcomp.compensation.online import LoadRls, OnlineSettings
+from ftcomp.compensation.online import LOAD_COLUMNS, LoadRls, OnlineSettings, estimate_columns
+from ftcomp.compensation.pipeline import MEASURE_RATE_S
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.io.calibration_json import save_calibration
-from ftcomp.session.online_load import LOAD_COLUMNS, MEASURE_RATE_S, estimate_columns
 from ftcomp.sim.cell import SimCell
 
 from conftest import TRUE_MODEL, synthetic_samples

@@ -9,9 +9,9 @@ import pytest
 
 import ftcomp
 from ftcomp.compensation.bias_tracking import BiasTrackingConfig
+from ftcomp.compensation.pipeline import Compensated
 from ftcomp.control.loop import Reading
 from ftcomp.errors import ParameterError
-from ftcomp.hardware.protocols import WrenchSample
 from ftcomp.session.stream import (
     StreamConfig,
     StreamLogger,
@@ -43,33 +43,24 @@ def test_a_stream_logs_every_reading_compensated_with_its_pose(tmp_path: Path) -
     assert all(p.duration_s == 0.5 and p.lost_packets is None for p in progress)
 
 
-class _Readings:
-    """A sensor whose readings since the last call are given by the test."""
-
-    def __init__(self) -> None:
-        self.due: list[WrenchSample] = []
-
-    def read_new(self) -> list[WrenchSample]:
-        out, self.due = self.due, []
-        return out
-
-
-def _reading(now_ns: int) -> Reading:
+def _reading(now_ns: int, stamps: range = range(0)) -> Reading:
     zero = np.zeros(6)
-    return Reading(now_ns, now_ns, zero, zero, np.zeros(3), np.eye(3), np.eye(3))
+    new = tuple(
+        Compensated(k * 1_000_000, np.full(6, float(k)), zero, np.eye(3), np.zeros(3))
+        for k in stamps
+    )
+    return Reading(now_ns, now_ns, zero, zero, np.zeros(3), np.eye(3), np.eye(3), new)
 
 
 def test_a_late_last_cycle_still_logs_the_readings_stamped_before_the_end() -> None:
     # A loop held up under load reaches the end 20 ms late: the readings of the 100 ms it
     # streamed are all logged (and none after it), not those up to the previous cycle alone.
-    sensor, rows = _Readings(), list[list[float]]()
-    logger = StreamLogger(sensor, rows.append, 0.1, with_pose=False)  # type: ignore[arg-type]
+    rows = list[list[float]]()
+    logger = StreamLogger(rows.append, 0.1, with_pose=False)
     ms = 1_000_000
     assert logger(_reading(0)) is not None  # the first cycle: readings from now on
-    sensor.due = [WrenchSample(k * ms, np.full(6, float(k))) for k in range(1, 50)]
-    assert logger(_reading(50 * ms)) is not None
-    sensor.due = [WrenchSample(k * ms, np.full(6, float(k))) for k in range(50, 121)]
-    assert logger(_reading(120 * ms)) is None  # over: the stream ends
+    assert logger(_reading(50 * ms, range(1, 50))) is not None
+    assert logger(_reading(120 * ms, range(50, 121))) is None  # over: the stream ends
     assert [round(row[0] * 1e3) for row in rows] == list(range(1, 100))
     assert logger.count == 99
 
@@ -112,5 +103,5 @@ def test_a_tracked_bias_follows_a_drifting_sensor_while_still_and_free(tmp_path:
 
 
 def test_tracking_the_bias_needs_a_calibration_and_excludes_the_online_load() -> None:
-    with pytest.raises(ParameterError, match="not both"):
+    with pytest.raises(ParameterError, match="track_bias and online_load: choose one"):
         StreamConfig(1.0, online_load=True, track_bias=BiasTrackingConfig())

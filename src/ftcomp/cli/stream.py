@@ -37,7 +37,7 @@ from ftcomp.errors import ParameterError
 from ftcomp.session.stream import StreamConfig
 
 #: How long the readings' rate is measured when --online-rate-hz is not given [s]: the value of
-#: ftcomp.session.online_load.MEASURE_RATE_S (a test checks), here so --help needs no numpy.
+#: ftcomp.compensation.pipeline.MEASURE_RATE_S (a test checks), here so --help needs no numpy.
 _MEASURE_S = 0.5
 
 if TYPE_CHECKING:

@@ -30,7 +30,8 @@ role (time constant ``memory_s``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, replace
 from enum import Enum
 
 import numpy as np
@@ -42,7 +43,18 @@ from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 from ftcomp.model import GravityModel, skew
 
-__all__ = ["GraspEvent", "GraspState", "LoadRls", "OnlineLoadCompensator", "OnlineSettings"]
+__all__ = [
+    "LOAD_COLUMNS",
+    "LOAD_STATE_CODES",
+    "GraspEvent",
+    "GraspState",
+    "LoadEvent",
+    "LoadRls",
+    "LoadTracker",
+    "OnlineLoadCompensator",
+    "OnlineSettings",
+    "estimate_columns",
+]
 
 
 class GraspState(Enum):
@@ -361,3 +373,148 @@ class OnlineLoadCompensator(GravityCompensator):
         self.rls.reset()
         self.theta_used = np.zeros(4)
         self.blend = 0.0
+
+
+#: Columns a log gains with ``--online-load``: the state (:data:`LOAD_STATE_CODES`), the load's
+#: mass and its standard deviation [kg], its centre of gravity (sensor frame) [m] and the largest
+#: standard deviation of the centre's three components [m]. Empty: mass 0, the rest NaN.
+LOAD_COLUMNS = (
+    "load_state",
+    "load_kg",
+    "load_kg_std",
+    "load_cx_m",
+    "load_cy_m",
+    "load_cz_m",
+    "load_c_std_m",
+)
+
+#: ``load_state``: 0 empty (nothing held: only the tool is compensated), 1 estimating (a grasp
+#: was detected, the load is being weighed, not yet compensated), 2 holding (the estimate has
+#: converged and is compensated too).
+LOAD_STATE_CODES = {GraspState.EMPTY: 0, GraspState.ESTIMATING: 1, GraspState.HOLDING: 2}
+
+_EMPTY_COLUMNS = [0.0, 0.0] + [math.nan] * 5
+
+
+@dataclass(frozen=True)
+class LoadEvent:
+    """A grasp, release or contact the online compensator confirmed.
+
+    Attributes:
+        kind: ``"grasp"``, ``"release"`` or ``"contact"``.
+        t_s: when the step began [s] (the log's clock).
+        confirmed_t_s: when it was confirmed, ``confirm_s`` later [s].
+        mass_kg, mass_std_kg: the load concerned and its standard deviation: for a grasp the
+            last estimate while it was held (or is, at the end), for a release the estimate of
+            the load let go; NaN for a contact.
+        converged: whether that estimate had converged (was compensated).
+    """
+
+    kind: str
+    t_s: float
+    confirmed_t_s: float
+    mass_kg: float = math.nan
+    mass_std_kg: float = math.nan
+    converged: bool = False
+
+    def describe(self) -> str:
+        """One line, e.g. ``grasp    at 0.500 s (confirmed 0.549 s): 0.5002 ± 0.0004 kg``."""
+        head = f"{self.kind:<8} at {self.t_s:.3f} s (confirmed {self.confirmed_t_s:.3f} s)"
+        if self.kind == "contact":
+            return head + ": a step that is neither (the load estimate is kept)"
+        if not math.isfinite(self.mass_kg):
+            return head
+        note = "" if self.converged else " (not converged)"
+        return f"{head}: {self.mass_kg:.4f} ± {self.mass_std_kg:.4f} kg{note}"
+
+
+def estimate_columns(rls: LoadRls) -> list[float]:
+    """``load_kg .. load_c_std_m`` of an estimate (the largest of the centre's three standard
+    deviations; infinite before any mass is seen)."""
+    c_std = math.sqrt(max(float(np.max(np.diag(rls.cog_covariance))), 0.0))
+    return [rls.mass_kg, rls.mass_std_kg, *rls.cog_m.tolist(), c_std]
+
+
+class LoadTracker:
+    """The load columns and events of an online compensator, followed after each call.
+
+    Args:
+        compensator: the compensator, called by someone else (once per reading or cycle).
+    """
+
+    def __init__(self, compensator: OnlineLoadCompensator) -> None:
+        self.compensator = compensator
+        self._calls = compensator.samples
+        self._seen = len(compensator.events)
+        # (call index, time) of the latest calls: an event's onset is confirm_samples - 1 back.
+        self._stamps: deque[tuple[int, float]] = deque(maxlen=compensator.confirm_samples + 1)
+        self._events: list[LoadEvent] = []
+        self._open: int | None = None  # the grasp whose load is weighed or held now
+        self._estimate = (math.nan, math.nan, False)  # mass, std, converged of that load
+        self.columns: list[float] = list(_EMPTY_COLUMNS)
+        self._rls_samples, self._state = -1, GraspState.EMPTY  # what the columns are of
+
+    @property
+    def events(self) -> list[LoadEvent]:
+        """Every event so far (an open grasp with the current estimate)."""
+        out = list(self._events)
+        if self._open is not None:
+            mass, std, converged = self._estimate
+            out[self._open] = replace(
+                out[self._open], mass_kg=mass, mass_std_kg=std, converged=converged
+            )
+        return out
+
+    def status_text(self) -> str:
+        """For a live line: the load while holding, ``weighing`` while estimating."""
+        state = self.compensator.state
+        if state is GraspState.HOLDING:
+            return f"load {self.columns[1]:.3f} ± {self.columns[2]:.3f} kg"
+        return "weighing" if state is GraspState.ESTIMATING else ""
+
+    def update(self, t_s: float) -> list[float]:
+        """After the compensator's call(s) for a reading at ``t_s`` [s] (the log's clock): note
+        new events, return the row's :data:`LOAD_COLUMNS`."""
+        c = self.compensator
+        if c.samples != self._calls:
+            self._calls = c.samples
+            self._stamps.append((c.samples - 1, t_s))
+        while self._seen < len(c.events):
+            self._record(c.events[self._seen], t_s)
+            self._seen += 1
+        if c.state is GraspState.EMPTY:
+            self.columns, self._state = list(_EMPTY_COLUMNS), c.state
+            return self.columns
+        rls = c.rls
+        if rls.samples != self._rls_samples or c.state is not self._state:
+            self._rls_samples, self._state = rls.samples, c.state
+            self.columns = [float(LOAD_STATE_CODES[c.state]), *estimate_columns(rls)]
+        mass, std = self.columns[1], self.columns[2]
+        converged = self._estimate[2] or c.state is GraspState.HOLDING
+        self._estimate = (mass, std, converged)
+        return self.columns
+
+    def _time_of(self, sample: int, now_sample: int, now_s: float) -> float:
+        for k, t in self._stamps:
+            if k == sample:
+                return t
+        return now_s - (now_sample - sample) / self.compensator.settings.rate_Hz
+
+    def _record(self, e: GraspEvent, now_s: float) -> None:
+        onset_s = self._time_of(e.onset_sample, e.sample, now_s)
+        confirmed_s = self._time_of(e.sample, e.sample, now_s)
+        if e.kind == "contact":
+            self._events.append(LoadEvent("contact", onset_s, confirmed_s))
+            return
+        mass, std, converged = self._estimate  # of the load held or weighed before this call
+        if self._open is not None:  # a release or a new grasp ends it
+            self._events[self._open] = replace(
+                self._events[self._open], mass_kg=mass, mass_std_kg=std, converged=converged
+            )
+            self._open = None
+        if e.kind == "release":
+            self._events.append(LoadEvent("release", onset_s, confirmed_s, mass, std, converged))
+        else:
+            self._events.append(LoadEvent(e.kind, onset_s, confirmed_s))
+            self._open = len(self._events) - 1
+        self._estimate = (math.nan, math.nan, False)

@@ -2,9 +2,11 @@
 
 A cycle is ``read sensor and pose -> compensate -> step -> command -> log``:
 
-- :class:`ControlCycle` does the I/O around the step: it reads the newest wrench and the robot's
-  pose, turns the TCP pose into the sensor's through the :class:`~ftcomp.hardware.protocols.Mount`,
-  compensates with the identified calibration (or passes the raw reading on), and sends a
+- :class:`ControlCycle` does the I/O around the step: it reads the newest wrench (or every
+  reading since the last cycle) and the robot's pose, turns the TCP pose into the sensor's
+  through the :class:`~ftcomp.hardware.protocols.Mount`, puts the reading through the cycle's one
+  :class:`~ftcomp.compensation.pipeline.WrenchPipeline` (bias and gravity or a load weighed
+  online, then bias tracking: computed once, here, and only read after), and sends a
   sensor-origin twist to the robot as a TCP twist.
 - The *step* is any callable ``step(reading) -> twist | None``: the admittance controller of a
   placement, a recorder that commands nothing, an online estimator. ``None`` ends the loop.
@@ -30,6 +32,8 @@ from numpy.typing import NDArray
 
 from ftcomp.compensation.bias_tracking import BiasTracker
 from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.compensation.pipeline import Compensated, WrenchPipeline
+from ftcomp.errors import ParameterError
 from ftcomp.hardware.pacing import LoopClock, TimingSummary, on_host_clock
 from ftcomp.hardware.protocols import Mount, ReportsLateness, Robot, WrenchSensor
 
@@ -43,6 +47,10 @@ Sink = Callable[["Reading", "NDArray[np.float64]"], None]
 class Reading:
     """What one cycle read, in the frames the controller works in.
 
+    A cycle that takes every reading (``ControlCycle(every_reading=True)``) hands them on in
+    :attr:`new`, each compensated once; its own wrench fields are then the newest of them (with
+    none new this cycle, the last cycle's; before the first, the raw reading and a NaN contact).
+
     Attributes:
         t_sample_ns: the wrench sample's stamp [ns] (session clock).
         now_ns: the robot's clock when the cycle read [ns].
@@ -52,6 +60,8 @@ class Reading:
         p_base_sensor: sensor origin [m], base frame, (3,).
         R_base_sensor: sensor orientation, (3, 3).
         R_base_tcp: TCP orientation, (3, 3) (for the mount's twist conversion).
+        new: every reading since the last cycle, through the pipeline, in time order (empty
+            unless the cycle takes every reading).
     """
 
     t_sample_ns: int
@@ -61,6 +71,7 @@ class Reading:
     p_base_sensor: NDArray[np.float64]
     R_base_sensor: NDArray[np.float64]
     R_base_tcp: NDArray[np.float64]
+    new: tuple[Compensated, ...] = ()
 
 
 class ControlCycle:
@@ -74,6 +85,16 @@ class ControlCycle:
             the raw reading on (the paper's uncompensated comparison).
         bias_tracker: follows the bias while the arm is still and free, after the compensator
             (None: the calibration's bias).
+        pipeline: the wrench pipeline itself, instead of ``compensator`` and ``bias_tracker``
+            (:meth:`~ftcomp.compensation.pipeline.WrenchPipeline.weighing`: a load weighed
+            online at a rate measured from the readings).
+        every_reading: take every reading the sensor delivered since the last cycle
+            (``sensor.read_new()``, those from before the first cycle dropped), each through the
+            pipeline, into :attr:`Reading.new` (a stream or a recorder at the sensor's rate);
+            False: the newest reading only, once per cycle (a control loop).
+
+    Attributes:
+        pipeline: the cycle's :class:`~ftcomp.compensation.pipeline.WrenchPipeline`.
     """
 
     def __init__(
@@ -84,24 +105,56 @@ class ControlCycle:
         mount: Mount | None = None,
         compensator: GravityCompensator | None = None,
         bias_tracker: BiasTracker | None = None,
+        pipeline: WrenchPipeline | None = None,
+        every_reading: bool = False,
     ) -> None:
+        if pipeline is not None and (compensator is not None or bias_tracker is not None):
+            raise ParameterError("give a pipeline or its compensator and bias tracker, not both")
         self.robot = robot
         self.sensor = sensor
         self.mount = mount if mount is not None else Mount()
-        self.compensator = compensator
-        self.bias_tracker = bias_tracker
+        self.pipeline = (
+            pipeline
+            if pipeline is not None
+            else WrenchPipeline(compensator, bias_tracker=bias_tracker)
+        )
+        self.every_reading = every_reading
         self.period_s = robot.control_period_s
+        self._newest: Compensated | None = None
+        self._started = False
 
     def read(self) -> Reading:
-        """Read the newest wrench and the pose, and compensate."""
+        """Read the newest wrench (or every new one) and the pose, through the pipeline."""
+        if self.every_reading:
+            return self._read_every()
         sample = self.sensor.read()
         pose = self.robot.pose()
         p, R = self.mount.sensor_pose(pose.p_base_tcp, pose.R_base_tcp)
         w = sample.wrench_sensor
-        contact = w if self.compensator is None else self.compensator.compensate(w, R)
-        if self.bias_tracker is not None:  # the bias followed while still and free
-            contact = self.bias_tracker.correct(sample.t_ns * 1e-9, contact, R)
+        contact = self.pipeline.contact(sample.t_ns, w, R)
         return Reading(sample.t_ns, pose.t_ns, w, contact, p, R, pose.R_base_tcp)
+
+    def _read_every(self) -> Reading:
+        sensor = self.sensor
+        sample = sensor.read()
+        pose = self.robot.pose()
+        p, R = self.mount.sensor_pose(pose.p_base_tcp, pose.R_base_tcp)
+        if not self._started:  # the readings from the loop's start on
+            sensor.read_new()
+            self._started = True
+        pipeline = self.pipeline
+        for s in sensor.read_new():
+            pipeline.push(s.t_ns, s.wrench_sensor, R, p)
+        new = tuple(pipeline.ready)
+        pipeline.ready.clear()
+        if new:
+            self._newest = new[-1]
+        last = self._newest
+        if last is None:
+            raw, contact, t_ns = sample.wrench_sensor, np.full(6, np.nan), sample.t_ns
+        else:
+            raw, contact, t_ns = last.wrench_raw_sensor, last.wrench_contact_sensor, last.t_ns
+        return Reading(t_ns, pose.t_ns, raw, contact, p, R, pose.R_base_tcp, new)
 
     def command(self, twist_sensor_base: NDArray[np.float64], reading: Reading) -> None:
         """Send the sensor origin's twist (base frame) to the robot as its TCP's twist."""

@@ -38,12 +38,9 @@ from ftcomp.control.filters import LowPassFilter
 from ftcomp.control.loop import Reading
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import ReportsLateness, Robot
+from ftcomp.session.outcome import Outcome
 
-__all__ = ["CompliantStep", "CycleRecord", "Outcome", "SettleRule", "Settling"]
-
-#: Why a compliant run ended: ``"duration"``, ``"settled"``, ``"loop_late"`` (the loop fell
-#: too far behind the robot's periods), or a :class:`~ftcomp.control.safety.StopReason` value.
-Outcome = str
+__all__ = ["CompliantStep", "CycleRecord", "SettleRule", "Settling"]
 
 #: Twist [m/s, rad/s] a caller adds to the law's (a planned motion), from the reading; None: none.
 Nominal = Callable[[Reading], "NDArray[np.float64] | None"]
@@ -180,13 +177,17 @@ class CompliantStep:
         self.settling: Settling | None = None
         self.t0_ns = 0
         self.cycles = 0
-        self.outcome: Outcome = "duration"
+        #: Why the run ended: :attr:`~ftcomp.session.outcome.Outcome.DURATION`,
+        #: ``SETTLED``, ``LOOP_LATE`` (the loop fell too far behind the robot's periods) or a
+        #: protective stop of the controller.
+        self.outcome = Outcome.DURATION
         self._zero = np.zeros(6)
 
     @property
     def faulted(self) -> bool:
-        """Whether the run ended by a protective stop or a late loop."""
-        return self.outcome not in ("duration", "settled")
+        """Whether the run ended by a protective stop or a late loop
+        (:attr:`~ftcomp.session.outcome.Outcome.faulted`)."""
+        return self.outcome.faulted
 
     @property
     def settled_at_ns(self) -> int | None:
@@ -208,10 +209,10 @@ class CompliantStep:
         """One cycle: controller step, record, and whether to go on."""
         state = self._start(r) if self.state is None else self.state
         if r.now_ns - self.t0_ns >= self.duration_ns:
-            self.outcome = "duration"
+            self.outcome = Outcome.DURATION
             return None
         if self.lateness is not None and self.lateness.periods_behind >= self.max_late:
-            self.outcome = "loop_late"
+            self.outcome = Outcome.LOOP_LATE
             return None
         nominal = self.nominal(r) if self.nominal is not None else None
         state, twist = self.controller.step(
@@ -241,10 +242,10 @@ class CompliantStep:
             )
         )
         if state.stop_reason is not None:
-            self.outcome = state.stop_reason.value
+            self.outcome = Outcome.stopped_by(state.stop_reason)
             return None
         if settled and settling is not None and settling.settled_at_ns is not None:
-            self.outcome = "settled"
+            self.outcome = Outcome.SETTLED
             if r.now_ns - settling.settled_at_ns >= round(settling.rule.then_hold_s * 1e9):
                 return None
         return self._zero if self.dry_run else twist

@@ -32,7 +32,6 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import ParameterError
-from ftcomp.hardware.protocols import WrenchSensor
 from ftcomp.session.pose_record import (
     PoseEvent,
     PoseRecord,
@@ -77,8 +76,10 @@ class StillCriteria:
 class ManualRecorder:
     """A :func:`~ftcomp.control.loop.run_loop` step recording still periods (module docstring).
 
+    It reads every reading its cycle took (``ControlCycle(every_reading=True)``: each cycle's
+    :attr:`~ftcomp.control.loop.Reading.new`, raw wrench and stamp), and commands nothing.
+
     Args:
-        sensor: the loop's sensor (its ``read_new`` gives every reading).
         n_poses: stop after this many poses, >= 1.
         criteria: what counts as still and as new.
         on_event: called with every :class:`~ftcomp.session.pose_record.PoseEvent` as it
@@ -89,7 +90,6 @@ class ManualRecorder:
 
     def __init__(
         self,
-        sensor: WrenchSensor,
         n_poses: int,
         criteria: StillCriteria,
         on_event: Callable[[PoseEvent], None],
@@ -100,7 +100,6 @@ class ManualRecorder:
             raise ParameterError(f"the number of poses must be an integer >= 1, got {n_poses}")
         if samples_per_pose is not None and samples_per_pose < 2:
             raise ParameterError(f"samples_per_pose must be >= 2, got {samples_per_pose}")
-        self.sensor = sensor
         self.n_poses = n_poses
         self.criteria = criteria
         self.on_event = on_event
@@ -127,13 +126,12 @@ class ManualRecorder:
         now, p, R = reading.now_ns, reading.p_base_sensor, reading.R_base_sensor
         if self._ref is None or self._moved(p, R):
             self._ref, self._since_ns, self._handled = (p.copy(), R.copy()), now, False
-            self._window.clear()
-            self.sensor.read_new()  # readings from before the stillness are of no use
+            self._window.clear()  # readings from before the stillness are of no use
             return self._zero
         assert self._since_ns is not None
-        for sample in self.sensor.read_new():
-            if sample.t_ns >= self._since_ns:
-                self._window.append((sample.t_ns, sample.wrench_sensor))
+        for c in reading.new:
+            if c.t_ns >= self._since_ns:
+                self._window.append((c.t_ns, c.wrench_raw_sensor))
         if self._handled or now - self._since_ns < self._still_ns or len(self._window) < 4:
             return self._zero
         wrench = np.array([w for _, w in self._window])

@@ -29,6 +29,8 @@ from numpy.typing import NDArray
 from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.bias_tracking import BiasTracker, BiasTrackingConfig
 from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.compensation.online import LOAD_COLUMNS, LoadEvent, LoadTracker
+from ftcomp.compensation.pipeline import WrenchPipeline
 from ftcomp.config_fields import check_fields, param
 from ftcomp.control.controller import CONTROL_FRAMES, AdmittanceController, ControlFrame
 from ftcomp.control.filters import LowPassFilter
@@ -51,7 +53,8 @@ from ftcomp.samples import WRENCH_COLUMNS
 from ftcomp.session.compliant import CompliantStep, CycleRecord, SettleRule
 from ftcomp.session.interrupts import InterruptHold
 from ftcomp.session.log import CsvLog, LogObserver, csv_log, save_timing
-from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, LoadTracker, require_tool_weight
+from ftcomp.session.online_load import require_tool_weight
+from ftcomp.session.outcome import Outcome
 
 __all__ = [
     "LAWS",
@@ -230,9 +233,9 @@ class RunResult:
     """How a run went.
 
     Attributes:
-        outcome: ``"duration"``, ``"settled"``, ``"loop_late"``, a
-            :class:`~ftcomp.control.safety.StopReason` value, ``"interrupted"`` (Ctrl-C) or
-            ``"error"`` (a hardware or loop fault, see ``message``).
+        outcome: :class:`~ftcomp.session.outcome.Outcome` ``DURATION``, ``SETTLED``,
+            ``LOOP_LATE``, a protective stop of the controller, ``INTERRUPTED`` (Ctrl-C) or
+            ``ERROR`` (a hardware or loop fault, see ``message``).
         message: what stopped it, one line ("" when it ended normally).
         cycles: control cycles run.
         duration_s: time from the first to the last logged cycle [s].
@@ -251,7 +254,7 @@ class RunResult:
         bias_updates: cycles that moved the tracked bias.
     """
 
-    outcome: str
+    outcome: Outcome
     message: str
     cycles: int
     duration_s: float
@@ -268,8 +271,8 @@ class RunResult:
     @property
     def faulted(self) -> bool:
         """Whether the run ended on a fault (the robot was stopped): not by its duration or a
-        settled contact."""
-        return self.outcome not in ("duration", "settled")
+        settled contact (:attr:`~ftcomp.session.outcome.Outcome.faulted`)."""
+        return self.outcome.faulted
 
 
 class _Summary:
@@ -306,13 +309,13 @@ def _tell_end(
     t0_ns: int,
     end_ns: int,
     load: LoadTracker | None,
-    outcome: str,
+    outcome: Outcome,
     message: str,
 ) -> None:
     """The run's events for its observers: the online load's, then how it ended."""
     for event in load.events if load is not None else []:
         log.event(t0_ns + round(event.confirmed_t_s * 1e9), event.kind, event.describe())
-    kind = "end" if outcome in ("duration", "settled") else "fault"
+    kind = "fault" if outcome.faulted else "end"
     log.event(end_ns, kind, f"{outcome}: {message}" if message else outcome)
 
 
@@ -338,7 +341,7 @@ def run_compliant(
             has them) to compensate with, or a bare gravity model.
         config: the run.
         log_path: the CSV log (:data:`RUN_COLUMNS`, with ``online_load`` then
-            :data:`~ftcomp.session.online_load.LOAD_COLUMNS`), written atomically; the caller
+            :data:`~ftcomp.compensation.online.LOAD_COLUMNS`), written atomically; the caller
             checks it may be written.
         mount: the sensor frame on the TCP (identity by default).
         source: names the calibration in errors.
@@ -358,20 +361,19 @@ def run_compliant(
         robot.connect_control()  # before the loop: it takes a while (a UR uploads its script)
     period_s = robot.control_period_s
     controller = config.admittance.controller(period_s)
-    compensator = GravityCompensator(calibration)
-    load: LoadTracker | None = None
-    if config.online_load:
-        from ftcomp.compensation.online import OnlineLoadCompensator, OnlineSettings
-
-        online = OnlineLoadCompensator(calibration, OnlineSettings(rate_Hz=1.0 / period_s))
-        compensator, load = online, LoadTracker(online)
     tracker = BiasTracker(config.track_bias) if config.track_bias is not None else None
-    cycle = ControlCycle(robot, sensor, mount=mount, compensator=compensator, bias_tracker=tracker)
+    pipeline = (
+        WrenchPipeline.weighing(calibration, 1.0 / period_s)  # one call per cycle
+        if config.online_load
+        else WrenchPipeline(GravityCompensator(calibration), bias_tracker=tracker)
+    )
+    load = pipeline.load
+    cycle = ControlCycle(robot, sensor, mount=mount, pipeline=pipeline)
     columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if load is not None else RUN_COLUMNS
     if tracker is not None:
         columns = (*columns, "bias_updated")
     summary = _Summary(config.settle.hold_s if config.settle is not None else 0.3)
-    outcome, message = "", ""
+    outcome, message = Outcome.DURATION, ""
     with (
         InterruptHold() as hold,
         csv_log(log_path, columns, digits=17, observers=observers) as log,
@@ -420,11 +422,11 @@ def run_compliant(
             run_loop(cycle, step, clock=clock, in_slack=(log_pending,))
             outcome = step.outcome
         except KeyboardInterrupt:
-            outcome, message = "interrupted", "interrupted (Ctrl-C)"
+            outcome, message = Outcome.INTERRUPTED, "interrupted (Ctrl-C)"
         except FtcompError as exc:
-            outcome, message = "error", str(exc)
+            outcome, message = Outcome.ERROR, str(exc)
         hold.finishing(f"finishing the log {log_path}")
-        if not message and outcome == "loop_late":
+        if not message and outcome is Outcome.LOOP_LATE:
             message = (
                 f"loop late: the loop fell {config.max_late_cycles} periods behind the robot's "
                 f"schedule "

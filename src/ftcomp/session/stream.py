@@ -6,8 +6,10 @@ the duration is up, the recording ends (a replay) or a fault or Ctrl-C stops it,
 new reading (``sensor.read_new``), so the log has the sensor's rate whatever the loop's, one row
 per reading (:func:`stream_columns`): the raw wrench and, with a pose, the sensor's orientation
 and origin (a valid sample CSV); with a calibration the contact wrench; with ``online_load`` the
-contact wrench with a grasped load weighed online and removed, and the load estimate
-(:class:`~ftcomp.session.online_load.StreamLoad`).
+contact wrench with a grasped load weighed online and removed, and the load estimate. The loop's
+cycle takes every reading and puts each through its one wrench pipeline
+(:class:`~ftcomp.compensation.pipeline.WrenchPipeline`, as ``ftcomp run``'s cycle does with its
+newest); the stream only logs what the cycle computed.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from numpy.typing import NDArray
 from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.bias_tracking import BiasTracker, BiasTrackingConfig
 from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.compensation.online import LOAD_COLUMNS, LoadEvent
+from ftcomp.compensation.pipeline import Compensated, WrenchPipeline
 from ftcomp.config_fields import check_fields, param
 from ftcomp.control.loop import ControlCycle, Reading, loop_clock, run_loop
 from ftcomp.errors import FtcompError, ParameterError
@@ -42,7 +46,8 @@ from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
 from ftcomp.session.interrupts import InterruptHold
 from ftcomp.session.log import LogObserver, csv_log, save_timing
-from ftcomp.session.online_load import LOAD_COLUMNS, LoadEvent, StreamLoad, require_tool_weight
+from ftcomp.session.online_load import require_tool_weight
+from ftcomp.session.outcome import Outcome
 
 __all__ = [
     "StreamConfig",
@@ -62,7 +67,7 @@ def stream_columns(
     """Columns of ``ftcomp stream``'s log: ``t`` [s, session clock], the raw wrench, with a pose
     the sensor's orientation (``qx,qy,qz,qw``) and origin (``px,py,pz`` [m], base frame), when
     compensating the contact wrench ``cfx..ctz``, and with ``online_load`` (compensating) the
-    load estimate (:data:`~ftcomp.session.online_load.LOAD_COLUMNS`), with the bias tracked
+    load estimate (:data:`~ftcomp.compensation.online.LOAD_COLUMNS`), with the bias tracked
     ``bias_updated`` (1 in a row whose reading moved the tracked bias). With a pose it is a
     valid sample CSV."""
     pose = ("qx", "qy", "qz", "qw", "px", "py", "pz") if with_pose else ()
@@ -73,84 +78,78 @@ def stream_columns(
 
 
 class StreamLogger:
-    """Logs every reading stamped less than ``duration_s`` after the first cycle, on the
-    session's clock (the cycle that finds the time over still logs those that came before it).
+    """A stream's step: logs every reading its cycle hands on (:attr:`~ftcomp.control.loop.
+    Reading.new`, each through the cycle's pipeline) stamped less than ``duration_s`` after the
+    first cycle, on the session's clock (the cycle that finds the time over still logs those
+    that came before it).
 
     Args:
-        sensor: the loop's sensor.
         write_row: called with each row (see :func:`stream_columns`).
         duration_s: how long to log [s].
         with_pose: log the sensor's pose (the robot reports one).
-        compensator: also log the contact wrench.
-        online: instead of ``compensator``, compensate with a grasped load weighed online, and
-            log its estimate (rows may be held back while it measures the readings' rate:
-            call :meth:`finish` at the end).
+        compensated: log the contact wrench.
+        online: log the online load's columns.
+        tracked: log whether each reading moved the tracked bias.
     """
 
     def __init__(
         self,
-        sensor: WrenchSensor,
         write_row: Callable[[Row], None],
         duration_s: float,
         *,
         with_pose: bool,
-        compensator: GravityCompensator | None = None,
-        online: StreamLoad | None = None,
-        tracker: BiasTracker | None = None,
+        compensated: bool = False,
+        online: bool = False,
+        tracked: bool = False,
     ) -> None:
         if not (math.isfinite(duration_s) and duration_s > 0.0):
             raise ParameterError(f"the duration must be > 0 s, got {duration_s}")
-        if compensator is not None and online is not None:
-            raise ParameterError("give a compensator or an online load estimate, not both")
-        self.sensor, self.write_row, self.with_pose = sensor, write_row, with_pose
-        self.compensator, self.online, self.tracker = compensator, online, tracker
+        self.write_row, self.with_pose = write_row, with_pose
+        self.compensated, self.online, self.tracked = compensated or online, online, tracked
         self.duration_ns = round(duration_s * 1e9)
         self.t0_ns: int | None = None
         self.count = 0
+        #: Readings logged that moved the tracked bias.
+        self.bias_updates = 0
         self.elapsed_s = 0.0
         self.contact_force_N = math.nan
         self._zero = np.zeros(6)
+        self._pose_of: NDArray[np.float64] | None = None
+        self._pose: list[float] = []
 
     def __call__(self, r: Reading) -> NDArray[np.float64] | None:
         """Log the readings that arrived since the previous cycle."""
         if self.t0_ns is None:
             self.t0_ns = r.now_ns
-            self.sensor.read_new()  # start with the readings from now on
         self.elapsed_s = (r.now_ns - self.t0_ns) * 1e-9
         over = r.now_ns - self.t0_ns >= self.duration_ns
-        samples = self.sensor.read_new()
-        if over:  # the readings stamped before the end still count, however late this cycle is
-            end_ns = self.t0_ns + self.duration_ns
-            samples = [s for s in samples if s.t_ns < end_ns]
-        pose: list[float] = []
-        if self.with_pose:
-            pose = [*quat_from_matrix(r.R_base_sensor), *r.p_base_sensor.tolist()]
-        online = self.online
-        for sample in samples:
-            w = sample.wrench_sensor
-            row = [sample.t_ns * 1e-9, *w.tolist(), *pose]
-            self.count += 1
-            if online is not None:
-                for ready in online.push(sample.t_ns, w, r.R_base_sensor, row):
-                    self.write_row(ready)
-                self.contact_force_N = online.contact_force_N
-                continue
-            if self.compensator is not None:
-                contact = self.compensator.compensate(w, r.R_base_sensor)
-                if self.tracker is not None:
-                    contact = self.tracker.correct(sample.t_ns * 1e-9, contact, r.R_base_sensor)
-                    row += [*contact.tolist(), 1.0 if self.tracker.updated else 0.0]
-                else:
-                    row += contact.tolist()
-                self.contact_force_N = float(np.linalg.norm(contact[:3]))
-            self.write_row(row)
+        self.log(r.new)
         return None if over else self._zero
 
-    def finish(self) -> None:
-        """Log the rows still held back (the online estimate measuring the rate)."""
-        if self.online is not None:
-            for row in self.online.finish():
-                self.write_row(row)
+    def log(self, readings: Sequence[Compensated]) -> None:
+        """Log readings through the pipeline, those stamped before the end (however late the
+        cycle that hands them on)."""
+        end_ns = (self.t0_ns or 0) + self.duration_ns
+        for c in readings:
+            if c.t_ns >= end_ns:
+                continue
+            row = [c.t_ns * 1e-9, *c.wrench_raw_sensor.tolist()]
+            if self.with_pose:
+                if c.R_base_sensor is not self._pose_of:  # one pose per cycle
+                    self._pose_of = c.R_base_sensor
+                    self._pose = [*quat_from_matrix(c.R_base_sensor), *c.p_base_sensor.tolist()]
+                row += self._pose
+            if self.compensated:
+                contact = c.wrench_contact_sensor
+                row += contact.tolist()
+                self.contact_force_N = float(np.linalg.norm(contact[:3]))
+            if self.online:
+                row += c.load
+            if self.tracked:
+                row.append(1.0 if c.bias_updated else 0.0)
+                self.bias_updates += 1 if c.bias_updated else 0
+            self.count += 1
+            self.write_row(row)
 
 
 @dataclass(frozen=True)
@@ -221,8 +220,9 @@ class StreamResult:
     """How a stream went.
 
     Attributes:
-        outcome: ``"duration"``, ``"end_of_replay"`` (a recording ran out), ``"interrupted"``
-            (Ctrl-C) or ``"error"`` (a sensor or connection fault, see ``message``).
+        outcome: :class:`~ftcomp.session.outcome.Outcome` ``DURATION``, ``END_OF_REPLAY`` (a
+            recording ran out), ``INTERRUPTED`` (Ctrl-C) or ``ERROR`` (a sensor or connection
+            fault, see ``message``).
         message: what stopped it, one line ("" when it ended normally).
         readings: readings logged.
         elapsed_s: the session's duration [s].
@@ -237,10 +237,10 @@ class StreamResult:
         observer_dropped_rows: log rows the observers did not get (their queue was full).
         bias_correction: the tracked bias minus the calibration's at the end [N, N*m], (6,)
             (None: not tracking).
-        bias_updates: readings that moved the tracked bias.
+        bias_updates: readings logged that moved the tracked bias.
     """
 
-    outcome: str
+    outcome: Outcome
     message: str
     readings: int
     elapsed_s: float
@@ -261,8 +261,8 @@ class StreamResult:
 
     @property
     def faulted(self) -> bool:
-        """Whether a fault or Ctrl-C ended it."""
-        return self.outcome in ("interrupted", "error")
+        """Whether a fault or Ctrl-C ended it (:attr:`~ftcomp.session.outcome.Outcome.faulted`)."""
+        return self.outcome.faulted
 
 
 def stream(
@@ -303,35 +303,38 @@ def stream(
             raise ParameterError("the online load estimate needs the tool's calibration")
         require_tool_weight(calibration, source)
     with_pose = config.with_pose and knows_pose
-    online = (
-        StreamLoad(calibration, config.online_rate_hz)
-        if config.online_load and calibration is not None
-        else None
-    )
-    compensator = (
-        GravityCompensator(calibration) if calibration is not None and online is None else None
-    )
-    if config.track_bias is not None and compensator is None:
+    if config.track_bias is not None and calibration is None:
         raise ParameterError("tracking the bias needs the tool's calibration")
     tracker = BiasTracker(config.track_bias) if config.track_bias is not None else None
+    if config.online_load and calibration is not None:
+        pipeline = WrenchPipeline.weighing(calibration, config.online_rate_hz)
+    else:
+        compensator = GravityCompensator(calibration) if calibration is not None else None
+        pipeline = WrenchPipeline(compensator, bias_tracker=tracker)
+    online = config.online_load
     columns = stream_columns(
         with_pose=with_pose,
         compensated=calibration is not None,
-        online_load=online is not None,
+        online_load=online,
         tracked=tracker is not None,
     )
     lost = sensor if isinstance(sensor, CountsLostPackets) else None
-    outcome, message = "duration", ""
+    outcome, message = Outcome.DURATION, ""
     with InterruptHold() as hold, csv_log(log_path, columns, observers=observers) as log:
         logger = StreamLogger(
-            sensor,
             log.write_later,  # formatted after the command (run_loop's slack)
             config.duration_s,
             with_pose=with_pose,
-            compensator=compensator,
+            compensated=calibration is not None,
             online=online,
-            tracker=tracker,
+            tracked=tracker is not None,
         )
+
+        def load_text() -> str:
+            if pipeline.measuring:
+                return "measuring the rate"
+            return pipeline.load.status_text() if pipeline.load is not None else ""
+
         sinks = []
         if on_progress is not None:
             period_s, last = config.progress_period_s, [time.monotonic()]
@@ -348,27 +351,36 @@ def stream(
                         config.duration_s,
                         logger.contact_force_N,
                         lost.lost_packets if lost is not None else None,
-                        online.status_text() if online is not None else "",
+                        load_text(),
                     )
                 )
 
             sinks.append(progress)
-        cycle = ControlCycle(robot, sensor, mount=mount)  # the logger compensates
+        cycle = ControlCycle(robot, sensor, mount=mount, pipeline=pipeline, every_reading=True)
         clock = loop_clock(robot, "ftcomp stream")
         try:
             run_loop(cycle, logger, sinks=sinks, clock=clock, in_slack=(log.flush,))
         except EndOfReplayError:
-            outcome = "end_of_replay"
+            outcome = Outcome.END_OF_REPLAY
         except KeyboardInterrupt:
-            outcome, message = "interrupted", "interrupted (Ctrl-C)"
+            outcome, message = Outcome.INTERRUPTED, "interrupted (Ctrl-C)"
         except FtcompError as exc:
-            outcome, message = "error", str(exc)
+            outcome, message = Outcome.ERROR, str(exc)
         finally:
             hold.finishing(f"finishing the log {log_path}")
-            logger.finish()
+            if logger.t0_ns is not None:  # the readings held back while the rate was measured
+                pipeline.finish(logger.t0_ns + logger.duration_ns)
+            logger.log(pipeline.ready)
+            pipeline.ready.clear()
             log.flush()
         t0_ns = logger.t0_ns if logger.t0_ns is not None else 0
-        for event in online.events if online is not None else []:  # stamped like the rows
+        logged_until_ns = t0_ns + logger.duration_ns  # the pipeline saw the readings after
+        events = [
+            e
+            for e in (pipeline.load.events if pipeline.load is not None else [])
+            if round(e.confirmed_t_s * 1e9) < logged_until_ns
+        ]
+        for event in events:  # stamped like the rows
             log.event(round(event.confirmed_t_s * 1e9), event.kind, event.describe())
         end_ns = t0_ns + round(logger.elapsed_s * 1e9)
         log.event(end_ns, "fault" if message else "end", message or outcome)
@@ -383,11 +395,11 @@ def stream(
         elapsed_s=logger.elapsed_s,
         log=log_path,
         health=health,
-        online_rate_hz=online.rate_Hz if online is not None else math.nan,
-        online_rate_source=online.rate_source if online is not None else "",
-        load_events=tuple(online.events) if online is not None else (),
+        online_rate_hz=pipeline.rate_Hz,
+        online_rate_source=pipeline.rate_source,
+        load_events=tuple(events),
         timing=loop_timing,
         observer_dropped_rows=dropped,
         bias_correction=tracker.correction.copy() if tracker is not None else None,
-        bias_updates=tracker.updates if tracker is not None else 0,
+        bias_updates=logger.bias_updates,
     )
