@@ -1,20 +1,15 @@
-"""A fake UR controller's RTDE output side on one loopback address (TCP port 30004).
+"""A fake UR controller's RTDE output side on one loopback address (TCP port 30004), serving a
+scripted scenario instead of the simulated cell.
 
-Written from Universal Robots' published RTDE protocol (version 2). Every package is
-``uint16 size`` (header included), ``uint8 type``, payload, big-endian. The stand-in answers:
-
-- ``V`` request protocol version (uint16) -> ``V`` uint8 accepted;
-- ``v`` get controller version -> ``v`` uint32 major, minor, bugfix, build (here 5.11.0.0);
-- ``O`` output setup (double frequency, comma-separated names) -> ``O`` uint8 recipe id and
-  the comma-separated types, ``NOT_FOUND`` for a name it does not serve;
-- ``S`` start -> ``S`` uint8 accepted, then a ``U`` data package (uint8 recipe id, the values
-  in recipe order) every 1/frequency seconds; ``P`` pause -> ``P`` uint8 accepted.
-
-With ``silent_after_s`` the data stops that long after a client started its stream (0: the
-controller answers the handshake but never sends data). The input side and the URScript
-interface (what ``RTDEControlInterface`` needs) are not
-served: the control path is tested against URSim (docs/hardware.md). The arm follows the
-scenario's TCP poses; ``ft_raw_wrench`` is the scenario's tool model in the sensor frame.
+The wire protocol is the twin's own (:class:`ftcomp.twin.rtde.RtdeSession`, written from
+Universal Robots' published RTDE protocol, version 2): there is one RTDE server in ftcomp, and
+this stand-in only decides what each data package holds. Every 2 ms a package goes to every
+client that started its stream: the scenario's TCP pose on its timeline, joints that follow
+it, and ``ft_raw_wrench`` / ``actual_TCP_force`` from the scenario's tool model (identity
+mount) with seeded noise. With ``silent_after_s`` the data stops that long after a client
+started its stream (0: the controller answers the handshake but never sends data). The
+URScript interface (what ``RTDEControlInterface`` needs) is not served: the control path is
+tested against the twin (``tests/devices``) and URSim (docs/hardware.md).
 
 Run as ``python -m standins.fake_ur HOST SCENARIO_JSON``; prints ``ready`` once it listens and
 exits by itself after ``scenario.max_s``.
@@ -23,17 +18,18 @@ exits by itself after ``scenario.max_s``.
 from __future__ import annotations
 
 import socket
-import struct
 import sys
 import threading
 import time
 
 import numpy as np
 
+from ftcomp.twin.rtde import RtdeSession
 from standins.scenario import Scenario
 
 PORT = 30004
 VERSION = (5, 11, 0, 0)
+_PERIOD_S = 0.002
 TYPES = {
     "timestamp": "DOUBLE",
     "actual_TCP_pose": "VECTOR6D",
@@ -48,22 +44,6 @@ TYPES = {
     "runtime_state": "UINT32",
 }
 _STARTED = time.monotonic()
-_FORMATS = {"DOUBLE": "d", "VECTOR6D": "6d", "INT32": "i", "UINT32": "I"}
-
-
-def _recv(conn: socket.socket, n: int) -> bytes:
-    data = b""
-    while len(data) < n:
-        chunk = conn.recv(n - len(data))
-        if not chunk:
-            raise ConnectionError("closed")
-        data += chunk
-    return data
-
-
-def _send(conn: socket.socket, lock: threading.Lock, kind: str, payload: bytes) -> None:
-    with lock:
-        conn.sendall(struct.pack(">HB", 3 + len(payload), ord(kind)) + payload)
 
 
 def _values(s: Scenario, name: str, t: float, rng: np.random.Generator) -> list[float]:
@@ -85,79 +65,48 @@ def _values(s: Scenario, name: str, t: float, rng: np.random.Generator) -> list[
     return [{"robot_mode": 7, "safety_mode": 1, "safety_status_bits": 1}.get(name, 1)]
 
 
-def _session(conn: socket.socket, s: Scenario, rng: np.random.Generator) -> None:
-    lock = threading.Lock()
-    names: list[str] = []
-    period = 0.002
-    streaming = threading.Event()
-
-    def stream() -> None:
-        fmt = ">B" + "".join(_FORMATS[TYPES[n]] for n in names)
-        k = 0
-        start = time.monotonic()
-        while streaming.is_set():
-            if s.silent_after_s is not None and time.monotonic() - start >= s.silent_after_s:
-                time.sleep(period)  # the controller hangs: nothing more is sent
-                continue
-            k += 1
-            due = start + k * period
-            now = time.monotonic()
-            if due > now:
-                time.sleep(due - now)
-            t = s.elapsed()
-            values: list[float] = []
-            for name in names:
-                values += _values(s, name, t, rng)
-            try:
-                _send(conn, lock, "U", struct.pack(fmt, 1, *values))
-            except OSError:
-                return
-
-    try:
-        while True:
-            size, kind = struct.unpack(">HB", _recv(conn, 3))
-            payload = _recv(conn, size - 3)
-            if kind == ord("V"):
-                _send(conn, lock, "V", b"\x01")
-            elif kind == ord("v"):
-                _send(conn, lock, "v", struct.pack(">IIII", *VERSION))
-            elif kind == ord("O"):
-                period = 1.0 / struct.unpack(">d", payload[:8])[0]
-                names = [n for n in payload[8:].decode().split(",") if n]
-                types = ",".join(TYPES.get(n, "NOT_FOUND") for n in names)
-                _send(conn, lock, "O", b"\x01" + types.encode())
-            elif kind == ord("S"):
-                _send(conn, lock, "S", b"\x01")
-                streaming.set()
-                threading.Thread(target=stream, daemon=True).start()
-            elif kind == ord("P"):
-                streaming.clear()
-                _send(conn, lock, "P", b"\x01")
-            else:
-                _send(conn, lock, chr(kind), b"\x00")
-    except (ConnectionError, OSError):
-        streaming.clear()
-    finally:
-        conn.close()
-
-
-def serve(host: str, s: Scenario) -> None:
-    """Accept RTDE clients until ``s.max_s`` has passed."""
-    server = socket.socket()
-    server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-    server.bind((host, PORT))
-    server.listen(4)
+def _serve_sessions(server: socket.socket, sessions: list[RtdeSession], until: float) -> None:
     server.settimeout(0.2)
-    print("ready", flush=True)
-    start = time.monotonic()
-    rng = np.random.default_rng(s.seed + 1)
-    while time.monotonic() - start < s.max_s:
+    while time.monotonic() < until:
         try:
             conn, _ = server.accept()
         except TimeoutError:
             continue
         conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        threading.Thread(target=_session, args=(conn, s, rng), daemon=True).start()
+        session = RtdeSession(conn, VERSION, lambda name, value: None)
+        sessions.append(session)
+        threading.Thread(target=session.serve, daemon=True).start()
+
+
+def serve(host: str, s: Scenario) -> None:
+    """Accept RTDE clients and stream the scenario to them until ``s.max_s`` has passed."""
+    server = socket.socket()
+    server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    server.bind((host, PORT))
+    server.listen(4)
+    print("ready", flush=True)
+    start = time.monotonic()
+    rng = np.random.default_rng(s.seed + 1)
+    sessions: list[RtdeSession] = []
+    threading.Thread(
+        target=_serve_sessions, args=(server, sessions, start + s.max_s), daemon=True
+    ).start()
+    streaming_since: float | None = None
+    due = start
+    while time.monotonic() - start < s.max_s:
+        due += _PERIOD_S
+        time.sleep(max(0.0, due - time.monotonic()))
+        live = [session for session in list(sessions) if session.started]
+        if not live:
+            continue
+        now = time.monotonic()
+        streaming_since = now if streaming_since is None else streaming_since
+        if s.silent_after_s is not None and now - streaming_since >= s.silent_after_s:
+            continue  # the controller hangs: nothing more is sent
+        t = s.elapsed()
+        state = {name: _values(s, name, t, rng) for name in TYPES}
+        for session in live:
+            session.publish(state, {})
 
 
 if __name__ == "__main__":
