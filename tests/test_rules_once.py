@@ -46,12 +46,6 @@ _PENDING_MESSAGES = {
 }
 #: Range checks still in cli/: (module, the condition's source).
 _PENDING_RANGES = {
-    # the tilt, load and seed of sim collect: their rules are CellConfig's (sim/cell_config.py,
-    # not yet declared as fields), MAX_SAMPLES_PER_POSE is the command's own
-    ("collect.py", "not 1 <= args.samples_per_pose <= MAX_SAMPLES_PER_POSE"),
-    ("collect.py", "args.seed < 0"),
-    ("collect.py", "not math.isfinite(args.load_kg) or not 0.0 < args.load_kg <= MAX_LOAD_KG"),
-    ("collect.py", "not math.isfinite(value) or abs(value) >= 30.0"),
     # the demo's seed (huang2020.settings.DemoSettings has no rule for it yet)
     ("demo.py", "args.seed < 0"),
     # --mount (cli/hardware_options.py, the device registry's rewrite)

@@ -249,7 +249,10 @@ def test_ctrl_c_in_a_hand_guided_session_keeps_the_poses_so_far(
     ("build", "match"),
     [
         (lambda: HandGuided(2), "n_poses must be >= 3"),
-        (lambda: HandGuided(3, samples_per_pose=1), "samples_per_pose must be an integer >= 2"),
+        (
+            lambda: HandGuided(3, samples_per_pose=1),
+            r"samples_per_pose must be in \[2, 100000\]",
+        ),
         (lambda: RobotDriven(paper_poses(), samples_per_pose=1), "samples_per_pose"),
         (lambda: RobotDriven(paper_poses(), move_duration_s=0.0), "move_duration_s must be"),
         (lambda: RobotDriven(paper_poses(), settle_max_s=math.nan), "settle_max_s must be"),

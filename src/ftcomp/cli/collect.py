@@ -8,23 +8,22 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
 from typing import Any
 
 from scipy.spatial.transform import Rotation
 
 from ftcomp import paper
+from ftcomp.cli.options import add_field_option
 from ftcomp.errors import ParameterError
 from ftcomp.frames import ENCODING_COLUMNS
 from ftcomp.io.atomic import atomic_write_text, check_writable
 from ftcomp.io.calibration_json import model_to_dict
 from ftcomp.io.samples_csv import write_samples
+from ftcomp.session.record import RobotDriven
+from ftcomp.sim.cell_config import CellConfig
 
-__all__ = ["MAX_SAMPLES_PER_POSE", "register", "robot_uri", "run"]
-
-#: Most readings per pose (about 80 s of a 1.2 kHz sensor; memory stays under 1 GB).
-MAX_SAMPLES_PER_POSE = 100_000
+__all__ = ["register", "robot_uri", "run"]
 
 
 def register(parser: argparse.ArgumentParser) -> None:
@@ -42,35 +41,37 @@ def register(parser: argparse.ArgumentParser) -> None:
         "encoding's columns (as in the sample CSV), an optional pose column and optional "
         "x_m,y_m,z_m sensor positions [m] (default: paper)",
     )
-    parser.add_argument(
-        "--samples-per-pose",
-        type=int,
-        default=500,
+    add_field_option(
+        parser,
+        RobotDriven,
+        "samples_per_pose",
         metavar="N",
-        help=f"readings recorded at each pose, 1..{MAX_SAMPLES_PER_POSE}, at the sensor's "
-        "1.2 kHz (default: 500, as the paper)",
+        help="readings recorded at each pose (as many as the paper by default), at the sensor's "
+        "1.2 kHz",
     )
-    parser.add_argument(
-        "--load-kg",
-        type=float,
+    add_field_option(
+        parser,
+        CellConfig,
+        "load_kg",
         metavar="X",
-        help="grasp a load of X kg (default: none, the empty gripper)",
+        help="a load to grasp",
+        none_means="none, the empty gripper",
     )
-    parser.add_argument(
-        "--tilt-deg",
-        type=float,
+    add_field_option(
+        parser,
+        CellConfig,
+        "tilt_deg",
         nargs=2,
         default=paper.TILT_DEG,
         metavar=("U", "V"),
-        help="base mounting tilt [deg], R_world_base = Rx(U) Ry(V) (default: the paper's "
-        f"{paper.TILT_DEG[0]:g} {paper.TILT_DEG[1]:g})",
+        help="base mounting tilt, R_world_base = Rx(U) Ry(V), the paper's by default",
     )
     parser.add_argument(
         "--no-gripper",
         action="store_true",
         help="the bare sensing end, to measure its own weight (default: with the gripper)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="sensor-noise seed, >= 0 (default: 0)")
+    add_field_option(parser, CellConfig, "seed")
     parser.add_argument(
         "--encoding",
         choices=tuple(ENCODING_COLUMNS),
@@ -99,22 +100,8 @@ def register(parser: argparse.ArgumentParser) -> None:
 
 
 def _check_args(args: argparse.Namespace) -> None:
-    from ftcomp.sim.backend import MAX_LOAD_KG
-
-    if not 1 <= args.samples_per_pose <= MAX_SAMPLES_PER_POSE:
-        raise ParameterError(
-            f"--samples-per-pose must be in 1..{MAX_SAMPLES_PER_POSE}, got {args.samples_per_pose}"
-        )
-    if args.seed < 0:
-        raise ParameterError(f"--seed must be >= 0, got {args.seed}")
-    if args.load_kg is not None:
-        if not math.isfinite(args.load_kg) or not 0.0 < args.load_kg <= MAX_LOAD_KG:
-            raise ParameterError(f"--load-kg must be in (0, {MAX_LOAD_KG}], got {args.load_kg}")
-        if args.no_gripper:
-            raise ParameterError("--load-kg needs the gripper: drop --no-gripper")
-    for name, value in zip(("U", "V"), args.tilt_deg, strict=True):
-        if not math.isfinite(value) or abs(value) >= 30.0:
-            raise ParameterError(f"--tilt-deg {name}={value} must be within +-30 deg")
+    if args.load_kg is not None and args.no_gripper:
+        raise ParameterError("--load-kg needs the gripper: drop --no-gripper")
     if args.truth is not None and Path(args.output).resolve() == Path(args.truth).resolve():
         raise ParameterError(f"-o and --truth are the same file: {args.output}")
 

@@ -28,6 +28,7 @@ __all__ = [
     "error_line",
     "map_field",
     "map_options",
+    "spec_default",
     "with_flags",
 ]
 
@@ -182,6 +183,11 @@ def _shown(default: object) -> str:
     if isinstance(default, (list, tuple)):
         return ",".join(_shown(v) for v in default)
     return f"{default:g}" if isinstance(default, float) else str(default)
+
+
+def spec_default(config: type, field: str) -> Any:
+    """The default of a config class's field (for a help text that must say it another way)."""
+    return _field_default(config, field)
 
 
 def _field_default(config: type, field: str) -> Any:

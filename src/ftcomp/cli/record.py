@@ -23,17 +23,16 @@ from typing import TYPE_CHECKING, get_args
 
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import PoseProgress, add_view_arguments
+from ftcomp.cli.options import add_field_option, spec_default
 from ftcomp.errors import ParameterError
 from ftcomp.frames import OrientationEncoding
+from ftcomp.session.record import RobotDriven
 
 if TYPE_CHECKING:
     from ftcomp.session.pose_record import PoseEvent
-    from ftcomp.session.record import HandGuided, RecordConfig, RobotDriven
+    from ftcomp.session.record import HandGuided, RecordConfig
 
 __all__ = ["register", "run"]
-
-#: Readings per pose when the robot drives.
-DEFAULT_SAMPLES_PER_POSE = 500
 
 
 def register(parser: argparse.ArgumentParser) -> None:
@@ -52,12 +51,15 @@ def register(parser: argparse.ArgumentParser) -> None:
         "poses to record",
     )
     parser.add_argument("--manual", action="store_true", help="the user moves the arm")
-    parser.add_argument(
-        "--samples-per-pose",
-        type=int,
+    add_field_option(
+        parser,
+        RobotDriven,
+        "samples_per_pose",
+        default=None,
         metavar="N",
-        help=f"readings per pose (default {DEFAULT_SAMPLES_PER_POSE}; --manual: every reading "
-        "of the still period)",
+        help="readings per pose",
+        none_means=f"{spec_default(RobotDriven, 'samples_per_pose')}; --manual: every reading "
+        "of the still period",
     )
     parser.add_argument(
         "--position-mm",
@@ -134,11 +136,10 @@ def _config(args: argparse.Namespace) -> RecordConfig:
             raise ParameterError(
                 "--poses N needs --manual; the robot drives through paper|FILE.csv"
             )
+        given = {} if args.samples_per_pose is None else {"samples_per_pose": args.samples_per_pose}
         plan = RobotDriven(
             paper_poses() if args.poses == "paper" else read_pose_file(args.poses),
-            samples_per_pose=(
-                DEFAULT_SAMPLES_PER_POSE if args.samples_per_pose is None else args.samples_per_pose
-            ),
+            **given,
             position_base_m=(
                 None if args.position_mm is None else np.array(args.position_mm) * 1e-3
             ),
