@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.arrays import freeze_field
+from ftcomp.config_fields import check_fields, param
 from ftcomp.control.loop import ControlCycle, loop_clock, run_loop
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import OrientationEncoding, quat_from_matrix
@@ -53,7 +54,17 @@ from ftcomp.session.pose_record import (
 from ftcomp.session.robot_driven import record_poses
 from ftcomp.session.stream import stream_columns
 
-__all__ = ["HandGuided", "RecordConfig", "RecordResult", "RobotDriven", "record"]
+__all__ = [
+    "MAX_SAMPLES_PER_POSE",
+    "HandGuided",
+    "RecordConfig",
+    "RecordResult",
+    "RobotDriven",
+    "record",
+]
+
+#: Most readings per pose (about 80 s of a 1.2 kHz sensor; memory stays under 1 GB).
+MAX_SAMPLES_PER_POSE = 100_000
 
 #: How a session ended.
 Ending = Literal["complete", "interrupted", "fault"]
@@ -64,20 +75,13 @@ def _positive(name: str, value: float) -> None:
         raise ParameterError(f"{name} must be a number > 0, got {value!r}")
 
 
-def _readings_per_pose(value: int | None, *, optional: bool) -> None:
-    if value is None and optional:
-        return
-    if not (isinstance(value, int) and not isinstance(value, bool) and value >= 2):
-        raise ParameterError(f"samples_per_pose must be an integer >= 2, got {value!r}")
-
-
 @dataclass(frozen=True)
 class RobotDriven:
     """The robot drives through poses.
 
     Attributes:
         poses: sensor orientations (and optionally positions) to visit, in order.
-        samples_per_pose: readings recorded at each pose, >= 2.
+        samples_per_pose: readings recorded at each pose, in [2, :data:`MAX_SAMPLES_PER_POSE`].
         position_base_m: the sensor origin for poses without a position [m], base frame, (3,);
             None: where the sensor is when the session starts.
         move_duration_s: about how long each move takes [s] (the robot caps the speed).
@@ -87,7 +91,13 @@ class RobotDriven:
     """
 
     poses: PoseList
-    samples_per_pose: int = 500
+    samples_per_pose: int = param(
+        500,
+        integer=True,
+        ge=2,
+        le=MAX_SAMPLES_PER_POSE,
+        help="readings recorded at each pose",
+    )
     position_base_m: NDArray[np.float64] | None = field(default=None, repr=False)
     move_duration_s: float = 2.0
     settle_max_s: float = 5.0
@@ -97,7 +107,7 @@ class RobotDriven:
     def __post_init__(self) -> None:
         if not isinstance(self.poses, PoseList):
             raise ParameterError(f"poses must be a PoseList, got {type(self.poses).__name__}")
-        _readings_per_pose(self.samples_per_pose, optional=False)
+        check_fields(self)
         if self.position_base_m is not None:
             freeze_field(self, "position_base_m", (3,), finite=True)
         _positive("move_duration_s", self.move_duration_s)
@@ -120,13 +130,21 @@ class HandGuided:
     Attributes:
         n_poses: poses to record, >= 3 (fewer cannot separate bias from gravity).
         still: when the arm counts as held still, and when a pose is new.
-        samples_per_pose: readings kept per pose (the still window's last ones), >= 2; None:
+        samples_per_pose: readings kept per pose (the still window's last ones), as
+            ``RobotDriven``'s; None:
             the last three quarters of the window.
     """
 
     n_poses: int
     still: StillCriteria = field(default_factory=StillCriteria)
-    samples_per_pose: int | None = None
+    samples_per_pose: int | None = param(
+        None,
+        integer=True,
+        ge=2,
+        le=MAX_SAMPLES_PER_POSE,
+        optional=True,
+        help="readings kept per pose (the still window's last ones)",
+    )
 
     def __post_init__(self) -> None:
         if not (isinstance(self.n_poses, int) and not isinstance(self.n_poses, bool)):
@@ -137,7 +155,7 @@ class HandGuided:
             )
         if not isinstance(self.still, StillCriteria):
             raise ParameterError("still must be a StillCriteria")
-        _readings_per_pose(self.samples_per_pose, optional=True)
+        check_fields(self)
 
 
 @dataclass(frozen=True)
