@@ -46,8 +46,6 @@ _PENDING_MESSAGES = {
 }
 #: Range checks still in cli/: (module, the condition's source).
 _PENDING_RANGES = {
-    # the demo's seed (huang2020.settings.DemoSettings has no rule for it yet)
-    ("demo.py", "args.seed < 0"),
     # --mount (cli/hardware_options.py, the device registry's rewrite)
     ("hardware_options.py", "len(values) != 6 or not all((math.isfinite(v) for v in values))"),
 }

@@ -9,8 +9,6 @@ import time
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from ftcomp.errors import ParameterError
-
 __all__ = ["register", "run"]
 
 
@@ -41,8 +39,6 @@ def register(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the demo with a progress bar, then print the summary table."""
-    if args.seed < 0:
-        raise ParameterError(f"--seed must be >= 0, got {args.seed}")
     from ftcomp.huang2020.demo import prepare_output, run_demo
     from ftcomp.huang2020.settings import DemoSettings
     from ftcomp.huang2020.terminal import summary_table, verdict_table

@@ -33,12 +33,9 @@ from ftcomp.cli.common import (
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import StatusLine, add_view_arguments
 from ftcomp.cli.options import add_field_option
+from ftcomp.compensation.pipeline import MEASURE_RATE_S
 from ftcomp.errors import ParameterError
 from ftcomp.session.stream import StreamConfig
-
-#: How long the readings' rate is measured when --online-rate-hz is not given [s]: the value of
-#: ftcomp.compensation.pipeline.MEASURE_RATE_S (a test checks), here so --help needs no numpy.
-_MEASURE_S = 0.5
 
 if TYPE_CHECKING:
     from ftcomp.hardware.protocols import Robot, StreamHealth
@@ -68,7 +65,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         StreamConfig,
         "online_rate_hz",
         metavar="HZ",
-        none_means=f"measured from the stamps of the first {_MEASURE_S:g} s of readings, held "
+        none_means=f"measured from the stamps of the first {MEASURE_RATE_S:g} s of readings, held "
         "back and then logged",
     )
     add_track_bias_argument(parser)

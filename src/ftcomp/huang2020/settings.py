@@ -49,7 +49,7 @@ class DemoSettings:
         if not self.k13_values_mm_per_N or not self.k23_values_mm_per_s_N:
             raise ParameterError("k13_values_mm_per_N and k23_values_mm_per_s_N need a value")
         if self.seed < 0:
-            raise ParameterError(f"seed must be >= 0, got {self.seed}")
+            raise ParameterError(f"seed must be >= 0, got {self.seed}", field="seed")
 
     @classmethod
     def full(cls, seed: int) -> DemoSettings:
