@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 from ftcomp.arrays import freeze_field
 from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.config_fields import check_fields, param
 from ftcomp.errors import ParameterError
 from ftcomp.io.atomic import atomic_output, check_writable
 from ftcomp.io.calibration_json import load_calibration
@@ -48,15 +49,6 @@ EXTRA_COLUMNS = ("fx_ext", "fy_ext", "fz_ext", "tx_ext", "ty_ext", "tz_ext", "lo
 PathLike = str | os.PathLike[str]
 
 
-def _optional_positive(name: str, value: float | None, *, integer: bool = False) -> None:
-    if value is None:
-        return
-    kind_ok = isinstance(value, int) if integer else isinstance(value, int | float)
-    if isinstance(value, bool) or not kind_ok or not (math.isfinite(value) and value > 0):
-        kind = "an integer" if integer else "a number"
-        raise ParameterError(f"{name} must be {kind} > 0 or None, got {value!r}")
-
-
 @dataclass(frozen=True)
 class CompensateConfig:
     """How to read and write.
@@ -70,17 +62,22 @@ class CompensateConfig:
         parquet_batch_rows: rows of a Parquet input read per block (None: the reader's default).
     """
 
-    force_range_N: float | None = None
-    torque_range_Nm: float | None = None
+    force_range_N: float | None = param(
+        None, gt=0.0, optional=True, unit="N", help="the sensor's force range per axis"
+    )
+    torque_range_Nm: float | None = param(
+        None, gt=0.0, optional=True, unit="N*m", help="the sensor's torque range per axis"
+    )
     overwrite: bool = False
-    csv_chunk_bytes: int | None = None
-    parquet_batch_rows: int | None = None
+    csv_chunk_bytes: int | None = param(
+        None, gt=0, integer=True, optional=True, help="bytes of a CSV input read per block"
+    )
+    parquet_batch_rows: int | None = param(
+        None, gt=0, integer=True, optional=True, help="rows of a Parquet input read per block"
+    )
 
     def __post_init__(self) -> None:
-        _optional_positive("force_range_N", self.force_range_N)
-        _optional_positive("torque_range_Nm", self.torque_range_Nm)
-        _optional_positive("csv_chunk_bytes", self.csv_chunk_bytes, integer=True)
-        _optional_positive("parquet_batch_rows", self.parquet_batch_rows, integer=True)
+        check_fields(self)
 
 
 @dataclass(frozen=True)
