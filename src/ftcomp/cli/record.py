@@ -23,9 +23,11 @@ from typing import TYPE_CHECKING, get_args
 
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import PoseProgress, add_view_arguments
-from ftcomp.cli.options import add_field_option, spec_default
+from ftcomp.cli.options import add_field_option, map_field, spec_default
 from ftcomp.errors import ParameterError
 from ftcomp.frames import OrientationEncoding
+from ftcomp.session.hand_guided import StillCriteria
+from ftcomp.session.pose_record import WrenchTolerance
 from ftcomp.session.record import RobotDriven
 
 if TYPE_CHECKING:
@@ -69,31 +71,30 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="robot-driven: the sensor origin for every pose, base frame [mm] (default: where "
         "it is at the start)",
     )
-    parser.add_argument(
-        "--move-s", type=float, default=2.0, help="about how long a move takes [s] (default 2)"
-    )
-    parser.add_argument(
-        "--settle-max-s",
-        type=float,
-        default=5.0,
-        help="longest wait for the arm to rest [s] (default 5)",
-    )
-    parser.add_argument("--still-s", type=float, default=1.0, help="--manual: still for [s] (1)")
-    parser.add_argument(
+    add_field_option(parser, RobotDriven, "move_duration_s", "--move-s")
+    add_field_option(parser, RobotDriven, "settle_max_s")
+    add_field_option(parser, StillCriteria, "still_s", help="--manual: still for")
+    add_field_option(
+        parser,
+        StillCriteria,
+        "min_separation_rad",
         "--min-separation-deg",
-        type=float,
-        default=5.0,
-        help="--manual: ignore a pose closer than this to a recorded one [deg] (5)",
+        scale=math.radians(1.0),
+        unit="deg",
+        help="--manual: ignore a pose closer than this to a recorded one",
     )
+    force_N, torque_Nm = (spec_default(WrenchTolerance, f) for f in ("force_N", "torque_Nm"))
     parser.add_argument(
         "--drift-N-Nm",
         type=float,
         nargs=2,
-        default=(0.1, 0.01),
+        default=(force_N, torque_Nm),
         metavar=("FORCE_N", "TORQUE_NM"),
         help="readings count as still when their mean moves less than this between the two "
-        "halves of a pose's window (default 0.1 N, 0.01 N*m)",
+        f"halves of a pose's window (default {force_N:g} N, {torque_Nm:g} N*m)",
     )
+    for field in ("force_N", "torque_Nm"):
+        map_field(parser, field, "--drift-N-Nm")
     parser.add_argument(
         "--encoding",
         choices=get_args(OrientationEncoding),
@@ -107,8 +108,6 @@ def register(parser: argparse.ArgumentParser) -> None:
 
 def _config(args: argparse.Namespace) -> RecordConfig:
     """The session the options ask for (checked by the library's records)."""
-    from ftcomp.session.hand_guided import StillCriteria
-    from ftcomp.session.pose_record import WrenchTolerance
     from ftcomp.session.record import HandGuided, RecordConfig, RobotDriven
 
     tolerance = WrenchTolerance(*args.drift_N_Nm)

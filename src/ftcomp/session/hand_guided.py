@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from ftcomp.config_fields import check_fields, param
 from ftcomp.errors import ParameterError
 from ftcomp.session.pose_record import (
     PoseEvent,
@@ -58,19 +59,23 @@ class StillCriteria:
         min_separation_rad: a pose closer than this to a recorded one is ignored [rad].
     """
 
-    still_s: float = 1.0
-    position_tol_m: float = 0.002
-    angle_tol_rad: float = math.radians(0.5)
+    still_s: float = param(1.0, gt=0.0, unit="s", help="still for")
+    position_tol_m: float = param(
+        0.002, gt=0.0, unit="m", help="largest movement of the sensor origin while still"
+    )
+    angle_tol_rad: float = param(
+        math.radians(0.5), gt=0.0, unit="rad", help="largest rotation while still"
+    )
     wrench: WrenchTolerance = field(default_factory=WrenchTolerance)
-    min_separation_rad: float = math.radians(5.0)
+    min_separation_rad: float = param(
+        math.radians(5.0),
+        ge=0.0,
+        unit="rad",
+        help="ignore a pose closer than this to a recorded one",
+    )
 
     def __post_init__(self) -> None:
-        for name in ("still_s", "position_tol_m", "angle_tol_rad"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise ParameterError(f"{name} must be > 0, got {value}")
-        if not (math.isfinite(self.min_separation_rad) and self.min_separation_rad >= 0.0):
-            raise ParameterError(f"min_separation_rad must be >= 0, got {self.min_separation_rad}")
+        check_fields(self)
 
 
 class ManualRecorder:

@@ -20,6 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.arrays import freeze_field
+from ftcomp.config_fields import check_fields, param
 from ftcomp.errors import ParameterError
 from ftcomp.samples import Samples
 
@@ -107,12 +108,15 @@ class WrenchTolerance:
         torque_Nm: same for the torques [N*m].
     """
 
-    force_N: float = 0.1
-    torque_Nm: float = 0.01
+    force_N: float = param(
+        0.1, gt=0.0, unit="N", help="largest change of the force's mean within a still window"
+    )
+    torque_Nm: float = param(
+        0.01, gt=0.0, unit="N*m", help="largest change of the torque's mean within a still window"
+    )
 
     def __post_init__(self) -> None:
-        if not (self.force_N > 0.0 and self.torque_Nm > 0.0):
-            raise ParameterError("wrench tolerances must be > 0")
+        check_fields(self)
 
 
 def wrench_drift(wrench: ArrayLike) -> NDArray[np.float64]:

@@ -70,11 +70,6 @@ MAX_SAMPLES_PER_POSE = 100_000
 Ending = Literal["complete", "interrupted", "fault"]
 
 
-def _positive(name: str, value: float) -> None:
-    if not (isinstance(value, int | float) and np.isfinite(value) and value > 0.0):
-        raise ParameterError(f"{name} must be a number > 0, got {value!r}")
-
-
 @dataclass(frozen=True)
 class RobotDriven:
     """The robot drives through poses.
@@ -99,8 +94,8 @@ class RobotDriven:
         help="readings recorded at each pose",
     )
     position_base_m: NDArray[np.float64] | None = field(default=None, repr=False)
-    move_duration_s: float = 2.0
-    settle_max_s: float = 5.0
+    move_duration_s: float = param(2.0, gt=0.0, unit="s", help="about how long a move takes")
+    settle_max_s: float = param(5.0, gt=0.0, unit="s", help="longest wait for the arm to rest")
     tolerance: WrenchTolerance = field(default_factory=WrenchTolerance)
     max_tries: int = 5
 
@@ -110,8 +105,6 @@ class RobotDriven:
         check_fields(self)
         if self.position_base_m is not None:
             freeze_field(self, "position_base_m", (3,), finite=True)
-        _positive("move_duration_s", self.move_duration_s)
-        _positive("settle_max_s", self.settle_max_s)
         if not isinstance(self.tolerance, WrenchTolerance):
             raise ParameterError("tolerance must be a WrenchTolerance")
         if not (isinstance(self.max_tries, int) and self.max_tries >= 1):
