@@ -39,8 +39,6 @@ _FLAG = re.compile(r"(?<![\w-])--[a-zA-Z][a-zA-Z0-9-]*")
 
 #: Library messages still naming a flag: (module, flag).
 _PENDING_MESSAGES = {
-    # the sim:// backend's robot/sensor pairing (sim/backend.py, being rewritten with CellConfig)
-    ("sim/backend.py", "--robot"),
     # the twin's UR face (the twin's rewrite)
     ("twin/ur_face.py", "--fault"),
 }

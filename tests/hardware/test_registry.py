@@ -51,5 +51,5 @@ def test_bad_uris_are_one_clear_error(robot: str, sensor: str, message: str) -> 
 
 
 def test_the_simulated_sensor_needs_the_simulated_robot() -> None:
-    with pytest.raises(ParameterError, match="needs --robot sim://"):
+    with pytest.raises(ParameterError, match="needs a sim:// robot"):
         open_sensor("sim://", None)

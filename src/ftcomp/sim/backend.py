@@ -123,7 +123,7 @@ def as_sim_cell(robot: Robot | None, needs: str) -> SimCell:
         ParameterError: the robot is not ``sim://``.
     """
     if not isinstance(robot, SimCell):
-        raise ParameterError(f"{needs} needs --robot sim://")
+        raise ParameterError(f"{needs} needs a sim:// robot")
     return robot
 
 
@@ -131,6 +131,6 @@ def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
     """The wrist sensor of the session's simulated cell."""
     if uri.options or uri.host or uri.path:
         raise ParameterError(
-            f"{uri.text!r}: the simulated sensor takes no options; give them to --robot sim://"
+            f"{uri.text!r}: the simulated sensor takes no options; give them to the sim:// robot"
         )
     return as_sim_cell(robot, f"{uri.text!r}: the simulated sensor").sensor
