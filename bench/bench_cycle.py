@@ -13,7 +13,8 @@ each cycle:
 =============  =====================================================================
 read           ``sensor.read()``
 pose           ``robot.pose()`` and ``Mount.sensor_pose`` (a mount with an offset)
-compensate     ``GravityCompensator.compensate`` and the cycle's ``Reading`` record
+compensate     the cycle's ``WrenchPipeline.contact`` (``GravityCompensator.compensate``) and
+               its ``Reading`` record
 step           ``AdmittanceController.step`` (combined law on z, 20 Hz low-pass, base frame,
                the raw reading passed for the frozen-value and range checks)
 settle         the settle rule of ``ftcomp run``: the error the step acted on through a 2 Hz
@@ -232,7 +233,10 @@ class _Run:
     def by_part(self, n: int) -> tuple[list[list[int]], list[Any]]:
         """``n`` cycles timed by part: per cycle the durations of PARTS [ns]; and the twists."""
         cycle, controller = self.cycle, self.controller
-        sensor, robot, mount, comp = cycle.sensor, cycle.robot, cycle.mount, cycle.compensator
+        sensor, robot, mount = cycle.sensor, cycle.robot, cycle.mount
+        # The cycle's compensation: its wrench pipeline (from b1f8e00 on), else its compensator.
+        pipeline = getattr(cycle, "pipeline", None)
+        comp = cycle.compensator if pipeline is None else None
         Reading, clock = self.reading, time.perf_counter_ns
         times, twists = [], []
         for _ in range(n):
@@ -244,7 +248,10 @@ class _Run:
             p, R = mount.sensor_pose(pose.p_base_tcp, pose.R_base_tcp)
             c = clock()
             raw = sample.wrench_sensor
-            contact = comp.compensate(raw, R)
+            if pipeline is not None:
+                contact = pipeline.contact(sample.t_ns, raw, R)
+            else:
+                contact = comp.compensate(raw, R)
             r = Reading(sample.t_ns, pose.t_ns, raw, contact, p, R, pose.R_base_tcp)
             d = clock()
             self.state, twist = _step(controller, self.state, r)
