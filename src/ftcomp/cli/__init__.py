@@ -130,16 +130,18 @@ def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ftcomp`` console script; returns the exit code."""
     args_list = list(sys.argv[1:] if argv is None else argv)
+    from ftcomp.errors import FtcompError
+
+    try:  # before the command's module builds its options (from configs that may need it)
+        _require_extra(args_list)
+    except FtcompError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     args = build_parser(args_list).parse_args(args_list)
     from ftcomp.cli.options import check_field_options, error_line
-    from ftcomp.errors import FtcompError
-    from ftcomp.extras import require_extra
 
-    name = " ".join(c for c in (args.command, vars(args).get("sim_command")) if c)
     try:
         check_field_options(args)  # each option built from a config field, by its rule
-        if name in COMMAND_EXTRAS:
-            require_extra(COMMAND_EXTRAS[name], f"ftcomp {name}")
         code: int = args.handler(args)
     except FtcompError as exc:
         print(f"error: {error_line(exc, args)}", file=sys.stderr)
@@ -155,6 +157,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_BROKEN_PIPE
     return code
+
+
+def _require_extra(argv: Sequence[str]) -> None:
+    """The extra the command named in ``argv`` needs, checked (:data:`COMMAND_EXTRAS`).
+
+    Raises:
+        MissingExtraError: it is not installed, naming it.
+    """
+    name = _chosen(argv, [*COMMANDS, "sim"])
+    if name == "sim":
+        sub = _chosen(argv[list(argv).index("sim") + 1 :], list(SIM_COMMANDS))
+        name = f"sim {sub}" if sub else None
+    if name in COMMAND_EXTRAS:
+        from ftcomp.extras import require_extra
+
+        require_extra(COMMAND_EXTRAS[name], f"ftcomp {name}")
 
 
 def _stdout_closed() -> bool:
