@@ -107,6 +107,9 @@ def map_options(parser: argparse.ArgumentParser) -> None:
     (``--log`` for ``log``); an explicit :func:`map_field` or :func:`add_field_option` wins.
     ``ftcomp.cli`` calls it for the command it registers."""
     for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):  # ftcomp poses design, ...
+            for sub in action.choices.values():
+                map_options(sub)
         long = [o for o in action.option_strings if o.startswith("--")]
         if long and action.dest != "help":
             map_field(parser, action.dest, long[0])
