@@ -2,7 +2,8 @@
 
 :class:`OnlineLoadCompensator` is a :class:`~ftcomp.compensation.compensator.GravityCompensator`
 that watches its own output. Every single-sample :meth:`~OnlineLoadCompensator.compensate` call
-(one per control cycle, as :class:`ftcomp.control.loop.ControlCycle` makes) also
+(one per reading, in time order, as a live cycle's
+:class:`~ftcomp.compensation.pipeline.WrenchPipeline` makes them) also
 
 1. runs a **grasp/release detector** on the compensated wrench: a step of the windowed mean force
    away from a slowly tracked baseline, confirmed when it persists for ``confirm_s``. A step whose
@@ -25,6 +26,10 @@ in the sensor frame, so RLS is the exact recursive form of the batch least squar
 variances its information matrix inverts to the parameters' covariance. A Kalman filter with a
 random-walk model would add nothing but a process noise to tune; the forgetting factor plays that
 role (time constant ``memory_s``).
+
+:class:`LoadTracker` follows a compensator call by call for a live log: the load columns of a
+row (:data:`LOAD_COLUMNS`) and the grasp, release and contact events (:class:`LoadEvent`) with
+their times and the mass each concerns.
 """
 
 from __future__ import annotations
