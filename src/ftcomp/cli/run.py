@@ -245,8 +245,7 @@ def run(args: argparse.Namespace) -> int:
     if args.log is not None:
         summary += f", MCAP {args.log}"
     if result.cycles:
-        t, e, window = result.travel_m * 1e3, result.final_error, config.settle
-        window_s = window.hold_s if window is not None else 0.3
+        t, e, window_s = result.travel_m * 1e3, result.final_error, config.final_error_window_s
         summary += (
             f"; travel [{t[0]:+.2f} {t[1]:+.2f} {t[2]:+.2f}] mm, "
             f"mean force error over the last {window_s:g} s "

@@ -40,7 +40,11 @@ from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import ReportsLateness, Robot
 from ftcomp.session.outcome import Outcome
 
-__all__ = ["CompliantStep", "CycleRecord", "SettleRule", "Settling"]
+__all__ = ["DEFAULT_HOLD_S", "CompliantStep", "CycleRecord", "SettleRule", "Settling"]
+
+#: How long the force error must stay in the band by default [s]; also the window a run's
+#: final error is averaged over without a settle rule.
+DEFAULT_HOLD_S = 0.3
 
 #: Twist [m/s, rad/s] a caller adds to the law's (a planned motion), from the reading; None: none.
 Nominal = Callable[[Reading], "NDArray[np.float64] | None"]
@@ -59,7 +63,7 @@ class SettleRule:
     band_N: float = param(
         gt=0.0, unit="N", help="end once the selected force error stays this small"
     )
-    hold_s: float = param(0.3, gt=0.0, unit="s", help="... for this long")
+    hold_s: float = param(DEFAULT_HOLD_S, gt=0.0, unit="s", help="... for this long")
     cutoff_hz: float = param(2.0, gt=0.0, unit="Hz", help="low-pass of the error judged")
     then_hold_s: float = param(0.0, ge=0.0, unit="s", help="control kept on after settling")
 

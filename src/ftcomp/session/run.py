@@ -50,7 +50,7 @@ from ftcomp.hardware.pacing import TimingSummary
 from ftcomp.hardware.protocols import Mount, Robot, TakesControl, WrenchSensor
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
-from ftcomp.session.compliant import CompliantStep, CycleRecord, SettleRule
+from ftcomp.session.compliant import DEFAULT_HOLD_S, CompliantStep, CycleRecord, SettleRule
 from ftcomp.session.interrupts import InterruptHold
 from ftcomp.session.log import CsvLog, LogObserver, csv_log, save_timing
 from ftcomp.session.online_load import require_tool_weight
@@ -227,6 +227,12 @@ class RunConfig:
             )
         check_fields(self)
 
+    @property
+    def final_error_window_s(self) -> float:
+        """How long the force error at the end is averaged over [s]: the settle rule's hold,
+        or its default hold without a rule."""
+        return self.settle.hold_s if self.settle is not None else DEFAULT_HOLD_S
+
 
 @dataclass(frozen=True)
 class RunResult:
@@ -242,7 +248,7 @@ class RunResult:
         period_s: the control period [s].
         travel_m: the sensor origin's displacement from start to end [m], base frame, (3,).
         final_error: the mean force error the controller acted on over the last
-            ``settle.hold_s`` (0.3 s without a rule) [N], control frame, (3,) (NaN: no cycle).
+            :attr:`RunConfig.final_error_window_s` [N], control frame, (3,) (NaN: no cycle).
         log: the log's path.
         load_events: the online load's grasp, release and contact events (empty without it).
         timing: how the loop kept time (:class:`~ftcomp.hardware.pacing.TimingSummary`; its
@@ -372,7 +378,7 @@ def run_compliant(
     columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if load is not None else RUN_COLUMNS
     if tracker is not None:
         columns = (*columns, "bias_updated")
-    summary = _Summary(config.settle.hold_s if config.settle is not None else 0.3)
+    summary = _Summary(config.final_error_window_s)
     outcome, message = Outcome.DURATION, ""
     with (
         InterruptHold() as hold,
