@@ -265,6 +265,36 @@ class StreamResult:
         return self.outcome.faulted
 
 
+class _Progress:
+    """Progress as one more log observer (:class:`~ftcomp.session.log.LogObserver`): the rows
+    it is handed on the observers' worker thread are its clock, ``where()`` what it reports."""
+
+    def __init__(
+        self,
+        on_progress: Callable[[StreamProgress], None],
+        where: Callable[[], StreamProgress],
+        period_s: float,
+    ) -> None:
+        self.on_progress, self.where, self.period_s = on_progress, where, period_s
+        self._last = time.monotonic()
+
+    def open(self, columns: Sequence[str]) -> None:
+        """Nothing to prepare."""
+
+    def row(self, t_ns: int, row: Sequence[float]) -> None:
+        """Report, if ``period_s`` has passed since the last report."""
+        now = time.monotonic()
+        if now - self._last >= self.period_s:
+            self._last = now
+            self.on_progress(self.where())
+
+    def event(self, t_ns: int, kind: str, text: str) -> None:
+        """Events are not progress."""
+
+    def close(self) -> None:
+        """Nothing to finish."""
+
+
 def stream(
     robot: Robot,
     sensor: WrenchSensor,
@@ -286,7 +316,8 @@ def stream(
         log_path: the CSV log, written atomically (the caller checks it may be written).
         calibration: compensate with it (needs the sensor's pose).
         mount: the sensor frame on the TCP (identity by default).
-        on_progress: called every ``config.progress_period_s`` with where the stream is.
+        on_progress: called at most every ``config.progress_period_s`` with where the stream
+            is, as a log row is handed on, on the observers' worker thread (off the loop's).
         source: names the calibration in errors.
         observers: see every log row (stamped with the reading's ``t_ns``) and the events (the
             online load's, the end and why), on a worker thread (an MCAP log, a live view).
@@ -319,6 +350,23 @@ def stream(
         tracked=tracker is not None,
     )
     lost = sensor if isinstance(sensor, CountsLostPackets) else None
+
+    def where() -> StreamProgress:  # read on the observers' thread: figures for display
+        if pipeline.measuring:
+            load = "measuring the rate"
+        else:
+            load = pipeline.load.status_text() if pipeline.load is not None else ""
+        return StreamProgress(
+            logger.count,
+            logger.elapsed_s,
+            config.duration_s,
+            logger.contact_force_N,
+            lost.lost_packets if lost is not None else None,
+            load,
+        )
+
+    if on_progress is not None:
+        observers = (*observers, _Progress(on_progress, where, config.progress_period_s))
     outcome, message = Outcome.DURATION, ""
     with InterruptHold() as hold, csv_log(log_path, columns, observers=observers) as log:
         logger = StreamLogger(
@@ -330,36 +378,10 @@ def stream(
             tracked=tracker is not None,
         )
 
-        def load_text() -> str:
-            if pipeline.measuring:
-                return "measuring the rate"
-            return pipeline.load.status_text() if pipeline.load is not None else ""
-
-        sinks = []
-        if on_progress is not None:
-            period_s, last = config.progress_period_s, [time.monotonic()]
-
-            def progress(*_: object) -> None:
-                now = time.monotonic()
-                if now - last[0] < period_s:
-                    return
-                last[0] = now
-                on_progress(
-                    StreamProgress(
-                        logger.count,
-                        logger.elapsed_s,
-                        config.duration_s,
-                        logger.contact_force_N,
-                        lost.lost_packets if lost is not None else None,
-                        load_text(),
-                    )
-                )
-
-            sinks.append(progress)
         cycle = ControlCycle(robot, sensor, mount=mount, pipeline=pipeline, every_reading=True)
         clock = loop_clock(robot, "ftcomp stream")
         try:
-            run_loop(cycle, logger, sinks=sinks, clock=clock, in_slack=(log.flush,))
+            run_loop(cycle, logger, clock=clock, in_slack=(log.flush,))
         except EndOfReplayError:
             outcome = Outcome.END_OF_REPLAY
         except KeyboardInterrupt:
