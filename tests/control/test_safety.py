@@ -118,3 +118,20 @@ def test_checks_raise_on_vectors_that_are_not_six_values() -> None:
         limit_twist(LIMITS, np.zeros(6), np.zeros(5), 1e-3)
     with pytest.raises(ParameterError, match=r"twist must have shape \(6,\)"):
         check_travel(LIMITS, np.zeros(6), np.zeros(7), 1e-3)
+
+
+def test_uniform_limits_make_the_per_axis_envelope_with_the_rotation_limits() -> None:
+    from ftcomp.control.safety import (
+        MAX_ROTATION_ACCEL_RAD_S2,
+        MAX_ROTATION_SPEED_RAD_S,
+        UniformLimits,
+    )
+
+    limits = UniformLimits(max_speed_m_s=0.01, max_rotation_rad=0.1).safety_limits((250.0, 6.0))
+    assert limits.max_twist.tolist() == [0.01] * 3 + [MAX_ROTATION_SPEED_RAD_S] * 3
+    assert limits.max_twist_rate.tolist() == [0.5] * 3 + [MAX_ROTATION_ACCEL_RAD_S2] * 3
+    assert limits.max_travel.tolist() == [0.02] * 3 + [0.1] * 3
+    assert limits.max_repeated_samples is None and limits.max_identical_samples == 5
+    assert limits.sensor_range == (250.0, 6.0)
+    with pytest.raises(ParameterError, match=r"^max_speed_m_s must be > 0 m/s, got 0$"):
+        UniformLimits(max_speed_m_s=0.0)

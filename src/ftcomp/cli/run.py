@@ -35,11 +35,7 @@ from ftcomp.cli.common import (
 from ftcomp.cli.hardware_options import add_hardware_arguments, open_hardware
 from ftcomp.cli.live_status import add_view_arguments
 from ftcomp.cli.options import add_field_option, map_field
-from ftcomp.control.safety import (
-    MAX_ROTATION_ACCEL_RAD_S2,
-    MAX_ROTATION_SPEED_RAD_S,
-    SafetyLimits,
-)
+from ftcomp.control.safety import UniformLimits
 from ftcomp.session.compliant import SettleRule
 from ftcomp.session.run import AdmittanceConfig, RunConfig
 
@@ -107,34 +103,20 @@ def register(parser: argparse.ArgumentParser) -> None:
         metavar="FX,FY,FZ,TX,TY,TZ",
     )
     add_field_option(parser, AdmittanceConfig, "filter_hz")
-    for field, flag, unit, default in (
-        ("max_twist", "--max-speed-mm-s", "mm/s", 20.0),
-        ("max_twist_rate", "--max-accel-mm-s2", "mm/s^2", 500.0),
-        ("max_travel", "--max-travel-mm", "mm", 20.0),
+    for field, flag, scale, unit in (
+        ("max_speed_m_s", "--max-speed-mm-s", mm, "mm/s"),
+        ("max_accel_m_s2", "--max-accel-mm-s2", mm, "mm/s^2"),
+        ("max_travel_m", "--max-travel-mm", mm, "mm"),
+        ("max_rotation_rad", "--max-rotation-deg", deg, "deg"),
+        ("max_force_N", "--max-force-N", 1.0, "N"),
+        ("max_torque_Nm", "--max-torque-Nm", 1.0, "N*m"),
+        ("stale_after_s", "--stale-ms", mm, "ms"),
     ):
-        add_field_option(
-            parser, SafetyLimits, field, flag, scale=mm, unit=unit, default=default, help=None
-        )
+        add_field_option(parser, UniformLimits, field, flag, scale=scale, unit=unit)
     add_field_option(
         parser,
-        SafetyLimits,
-        "max_travel",
-        "--max-rotation-deg",
-        scale=deg,
-        unit="deg",
-        default=5.0,
-        help="largest rotation per axis",
-    )
-    add_field_option(parser, SafetyLimits, "max_force_N", default=40.0)
-    add_field_option(parser, SafetyLimits, "max_torque_Nm", default=8.0)
-    add_field_option(
-        parser, SafetyLimits, "stale_after_s", "--stale-ms", scale=mm, unit="ms", default=20.0
-    )
-    add_field_option(
-        parser,
-        SafetyLimits,
+        UniformLimits,
         "max_identical_samples",
-        default=5,
         off=0,
         metavar="N",
         help="new readings identical to the last that stop as a frozen sensor, beyond N "
@@ -157,23 +139,19 @@ def _check(args: argparse.Namespace) -> None:
 
 def _config(args: argparse.Namespace) -> RunConfig:
     """The run's configuration from the arguments, in SI units."""
-    import numpy as np
 
     from ftcomp.compensation.bias_tracking import BiasTrackingConfig
 
-    travel, rotation = args.max_travel_mm * 1e-3, math.radians(args.max_rotation_deg)
-    limits = SafetyLimits(
-        max_twist=np.array([args.max_speed_mm_s * 1e-3] * 3 + [MAX_ROTATION_SPEED_RAD_S] * 3),
-        max_twist_rate=np.array(
-            [args.max_accel_mm_s2 * 1e-3] * 3 + [MAX_ROTATION_ACCEL_RAD_S2] * 3
-        ),
-        max_travel=np.array([travel] * 3 + [rotation] * 3),
+    limits = UniformLimits(
+        max_speed_m_s=args.max_speed_mm_s * 1e-3,
+        max_accel_m_s2=args.max_accel_mm_s2 * 1e-3,
+        max_travel_m=args.max_travel_mm * 1e-3,
+        max_rotation_rad=math.radians(args.max_rotation_deg),
         max_force_N=args.max_force_N,
         max_torque_Nm=args.max_torque_Nm,
         stale_after_s=args.stale_ms * 1e-3,
-        max_repeated_samples=None,  # a late tick is no fault; data older than --stale-ms is
         max_identical_samples=args.max_identical_samples or None,
-    )
+    ).safety_limits()
     admittance = AdmittanceConfig(
         limits,
         law=args.law,

@@ -20,6 +20,7 @@ from ftcomp.control.laws import (
 from ftcomp.control.safety import (
     SafetyLimits,
     StopReason,
+    UniformLimits,
     WatchdogState,
     check_range,
     check_sample,
@@ -40,6 +41,7 @@ __all__ = [
     "PositionLaw",
     "SafetyLimits",
     "StopReason",
+    "UniformLimits",
     "VelocityLaw",
     "WatchdogState",
     "check_range",

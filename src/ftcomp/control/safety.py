@@ -34,6 +34,7 @@ __all__ = [
     "MAX_ROTATION_SPEED_RAD_S",
     "SafetyLimits",
     "StopReason",
+    "UniformLimits",
     "WatchdogState",
     "check_range",
     "check_sample",
@@ -153,6 +154,65 @@ class SafetyLimits:
             check_value("sensor_range", SENSOR_RANGE, r)
         per_axis = None if r is None else frozen_array(np.repeat(r, 3), (6,), name="sensor_range")
         object.__setattr__(self, "_range_per_axis", per_axis)
+
+
+@dataclass(frozen=True)
+class UniformLimits:
+    """A safety envelope given as one limit on x, y and z and one on every rotation (``ftcomp
+    run``'s): :meth:`safety_limits` makes the per-axis :class:`SafetyLimits`, the rotation's
+    speed and acceleration those of :data:`MAX_ROTATION_SPEED_RAD_S` and
+    :data:`MAX_ROTATION_ACCEL_RAD_S2`. Units are SI; each field's range is declared with it.
+
+    Attributes:
+        max_speed_m_s: speed limit on x, y, z [m/s].
+        max_accel_m_s2: acceleration limit on x, y, z [m/s^2].
+        max_travel_m: largest travel on x, y, z from the start [m].
+        max_rotation_rad: largest rotation about each axis from the start [rad].
+        max_force_N, max_torque_Nm, stale_after_s, max_repeated_samples, max_identical_samples:
+            as :class:`SafetyLimits`' (no count of repeated stamps by default: a late tick is no
+            fault, data older than ``stale_after_s`` is).
+    """
+
+    max_speed_m_s: float = param(0.02, gt=0.0, unit="m/s", help="speed limit")
+    max_accel_m_s2: float = param(0.5, gt=0.0, unit="m/s^2", help="acceleration limit")
+    max_travel_m: float = param(0.02, gt=0.0, unit="m", help="largest travel per axis")
+    max_rotation_rad: float = param(
+        math.radians(5.0), gt=0.0, unit="rad", help="largest rotation per axis"
+    )
+    max_force_N: float = param(40.0, gt=0.0, unit="N", help="protective stop above")
+    max_torque_Nm: float = param(8.0, gt=0.0, unit="N*m", help="protective stop above")
+    stale_after_s: float = param(0.02, gt=0.0, unit="s", help="a reading older than this stops")
+    max_repeated_samples: int | None = param(
+        None,
+        ge=0,
+        integer=True,
+        optional=True,
+        help="samples with an already seen time stamp tolerated in a row",
+    )
+    max_identical_samples: int | None = param(
+        5,
+        ge=1,
+        integer=True,
+        optional=True,
+        help="new readings identical to the last that stop as a frozen sensor, beyond this many",
+    )
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+    def safety_limits(self, sensor_range: tuple[float, float] | None = None) -> SafetyLimits:
+        """The per-axis envelope (base-frame axes), with the sensor's range if given."""
+        return SafetyLimits(
+            max_twist=np.array([self.max_speed_m_s] * 3 + [MAX_ROTATION_SPEED_RAD_S] * 3),
+            max_twist_rate=np.array([self.max_accel_m_s2] * 3 + [MAX_ROTATION_ACCEL_RAD_S2] * 3),
+            max_travel=np.array([self.max_travel_m] * 3 + [self.max_rotation_rad] * 3),
+            max_force_N=self.max_force_N,
+            max_torque_Nm=self.max_torque_Nm,
+            stale_after_s=self.stale_after_s,
+            max_repeated_samples=self.max_repeated_samples,
+            max_identical_samples=self.max_identical_samples,
+            sensor_range=sensor_range,
+        )
 
 
 class WatchdogState(NamedTuple):
