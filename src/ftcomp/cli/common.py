@@ -79,14 +79,21 @@ def warn_live_drift(calibration: Calibration, path: str, *, tracking: bool = Fal
 
 
 def add_track_bias_argument(parser: argparse.ArgumentParser) -> None:
-    """``--track-bias``: the bias follows the sensor while the arm is still and free."""
+    """``--track-bias``: the bias follows the sensor while the arm is still and free (its
+    thresholds, in the help, are :class:`~ftcomp.compensation.bias_tracking.BiasTrackingConfig`'s
+    defaults)."""
+    from ftcomp.compensation.bias_tracking import BiasTrackingConfig
+
+    d = BiasTrackingConfig()
     parser.add_argument(
         "--track-bias",
         action="store_true",
         help="let the calibration's bias follow the sensor while the arm is still and nothing "
-        "touches the tool (compensated force < 1 N and torque < 0.05 N·m, orientation steady "
-        "for 0.5 s; at most 0.05 N/s, 2 N in all); the log gains bias_updated (default: off; "
-        "a steady contact lighter than 1 N would be taken for bias)",
+        f"touches the tool (compensated force < {d.contact_force_N:g} N and torque < "
+        f"{d.contact_torque_Nm:g} N·m, orientation steady for {d.still_hold_s:g} s; at most "
+        f"{d.max_rate_force_N_per_s:g} N/s, {d.max_correction_force_N:g} N in all); the log "
+        "gains bias_updated (default: off; a steady contact lighter than "
+        f"{d.contact_force_N:g} N would be taken for bias)",
     )
 
 
