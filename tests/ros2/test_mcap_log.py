@@ -1,9 +1,10 @@
-"""MCAP logs of control loops: written as a run_loop sink, read back with rosbags."""
+"""MCAP logs of live sessions: a session's rows through SessionMcapLog, read back with rosbags."""
 
 from __future__ import annotations
 
 import csv
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -17,7 +18,9 @@ from ftcomp.control.loop import Reading
 from ftcomp.errors import ParameterError
 from ftcomp.io.calibration_json import save_calibration
 from ftcomp.model import GravityModel
-from ftcomp.ros2.mcap_log import TOPICS, McapLog
+from ftcomp.ros2.mcap_log import SESSION_TOPICS, TOPICS, McapLog, SessionMcapLog
+from ftcomp.session.compliant import CycleRecord
+from ftcomp.session.run import RUN_COLUMNS, cycle_row
 
 from conftest import synthetic_samples
 
@@ -26,7 +29,7 @@ def _read(path: Path) -> dict[str, list[tuple[int, object]]]:
     out: dict[str, list[tuple[int, object]]] = {}
     with AnyReader([path]) as reader:
         for conn in reader.connections:
-            assert TOPICS[conn.topic] == conn.msgtype
+            assert SESSION_TOPICS[conn.topic] == conn.msgtype
         for conn, t, raw in reader.messages():
             out.setdefault(conn.topic, []).append((t, reader.deserialize(raw, conn.msgtype)))
     return out
@@ -39,7 +42,8 @@ def _vec(v) -> list[float]:
 def test_every_cycle_is_logged_with_its_values_and_stamps(tmp_path: Path, rng) -> None:
     path = tmp_path / "run.mcap"
     readings = []
-    with McapLog(path, base_frame="base_link", sensor_frame="ft") as log:
+    with SessionMcapLog(path, base_frame="base_link", sensor_frame="ft") as log:
+        log.open(RUN_COLUMNS)
         for k in range(5):
             raw = rng.normal(size=6)
             contact = raw - 1.0 if k != 3 else np.full(6, np.nan)  # a fault stays visible
@@ -48,16 +52,22 @@ def test_every_cycle_is_logged_with_its_values_and_stamps(tmp_path: Path, rng) -
                 1000 * k + 7, 10**9 + 1000 * k, raw, contact, rng.normal(size=3), R, R
             )
             twist = rng.normal(size=6)
-            log(reading, twist)
+            error = rng.normal(size=6)
+            state: Any = None  # the row does not carry the controller's state
+            record = CycleRecord(reading, state, error, None, twist, True, False)
+            log.row(reading.now_ns, cycle_row(record, 0))
             readings.append((reading, twist))
     assert path.is_file() and [p.name for p in tmp_path.iterdir()] == ["run.mcap"]
     logged = _read(path)
-    assert {topic: len(msgs) for topic, msgs in logged.items()} == dict.fromkeys(TOPICS, 5)
+    counts = {topic: len(msgs) for topic, msgs in logged.items()}
+    assert counts == dict.fromkeys([*TOPICS, "/ftcomp/wrench_error"], 5)
     for k, (reading, twist) in enumerate(readings):
         t_raw, raw = logged["/ftcomp/wrench_raw"][k]
         assert t_raw == reading.now_ns
         assert raw.header.frame_id == "ft"
-        assert raw.header.stamp.sec * 10**9 + raw.header.stamp.nanosec == reading.t_sample_ns
+        # The sample's stamp from the row's seconds: to the nanosecond near 1 s.
+        stamp = raw.header.stamp.sec * 10**9 + raw.header.stamp.nanosec
+        assert abs(stamp - reading.t_sample_ns) <= 1
         assert (
             _vec(raw.wrench.force) + _vec(raw.wrench.torque) == reading.wrench_raw_sensor.tolist()
         )
@@ -72,6 +82,7 @@ def test_every_cycle_is_logged_with_its_values_and_stamps(tmp_path: Path, rng) -
         np.testing.assert_allclose(R, reading.R_base_sensor, atol=1e-12)
         tw = logged["/ftcomp/twist_command"][k][1].twist
         assert _vec(tw.linear) + _vec(tw.angular) == twist.tolist()
+    assert "/ftcomp/events" not in logged  # a channel opened, no event written
 
 
 def test_an_existing_log_is_kept(tmp_path: Path) -> None:
@@ -96,11 +107,12 @@ def test_sim_place_log_reads_back_with_every_topic_and_message_count(
     logged = _read(log)
     counts = {topic: len(msgs) for topic, msgs in logged.items()}
     cycles = counts["/ftcomp/wrench_raw"]
-    assert counts == dict.fromkeys(TOPICS, cycles)
-    assert f"wrote {log} ({4 * cycles} messages)" in printed
+    every_cycle = dict.fromkeys([*TOPICS, "/ftcomp/wrench_error"], cycles)
+    assert counts == {**every_cycle, "/ftcomp/events": 1}  # and how it ended
+    assert f"wrote {log} ({5 * cycles + 1} messages)" in printed
     with (out / "timeseries.csv").open() as handle:
         rows = sum(1 for _ in csv.DictReader(handle))
-    assert cycles == rows - 1  # the last step logs its row, then ends the loop
+    assert cycles == rows  # one per controlled cycle, the last (whose step ends the loop) too
     # The compensated wrench is the raw one less the calibration's bias and tool gravity at
     # the logged pose.
     compensator = GravityCompensator(identified)

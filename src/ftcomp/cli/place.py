@@ -93,7 +93,8 @@ def register(p: argparse.ArgumentParser) -> None:
         "--log",
         metavar="RUN.mcap",
         help="also log every cycle as MCAP (ROS 2 profile: raw and compensated WrenchStamped, "
-        "/tf, commanded twist) for rosbags, Foxglove, Lichtblick (default: no log)",
+        "/tf, the wrench error, commanded twist, the end as an event) for rosbags, Foxglove, "
+        "Lichtblick (default: no log)",
     )
     p.add_argument(
         "--force",
@@ -151,10 +152,10 @@ def _run(args: argparse.Namespace) -> int:
     if args.log is None:
         result = run_placement(cell, model, config)
     else:
-        from ftcomp.ros2.mcap_log import McapLog
+        from ftcomp.ros2.mcap_log import SessionMcapLog
 
-        with McapLog(args.log, overwrite=args.force) as log:
-            result = run_placement(cell, model, config, sinks=[log])
+        with SessionMcapLog(args.log, overwrite=args.force) as log:
+            result = run_placement(cell, model, config, observers=[log])
         print(f"wrote {args.log} ({sum(log.counts.values())} messages)")
     title = f"{args.control} on {args.surface}" + (
         ", no compensation" if args.no_compensation else ""

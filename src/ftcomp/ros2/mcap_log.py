@@ -1,26 +1,10 @@
-"""Control-loop logs as MCAP files in the ROS 2 profile, for rosbags, Foxglove and Lichtblick.
-
-:class:`McapLog` is a sink of :func:`ftcomp.control.loop.run_loop` (``sink(reading, twist)``):
-every cycle it writes, CDR-encoded with the standard ROS 2 message definitions embedded
-(``ros2msg`` schemas):
-
-==============================  ==================================  ==========================
-topic                           type                                content
-==============================  ==================================  ==========================
-``/ftcomp/wrench_raw``          ``geometry_msgs/msg/WrenchStamped``  the reading, sensor frame
-``/ftcomp/wrench_compensated``  ``geometry_msgs/msg/WrenchStamped``  the contact wrench
-``/tf``                         ``tf2_msgs/msg/TFMessage``          base -> sensor pose
-``/ftcomp/twist_command``       ``geometry_msgs/msg/TwistStamped``  the commanded sensor twist
-==============================  ==================================  ==========================
-
-Wrenches are stamped with the sample's ``t_sample_ns``; pose and twist with the cycle's
-``now_ns``; the log time of every message is ``now_ns`` (the session clock: simulation time for
-``sim://``, so a simulated run starts near 1970-01-01 in a viewer).
+"""Live sessions' logs as MCAP files in the ROS 2 profile, for rosbags, Foxglove and Lichtblick.
 
 :class:`SessionMcapLog` is a session's log observer
-(:class:`~ftcomp.session.log.LogObserver`, ``--log run.mcap`` of ``ftcomp stream``, ``record``
-and ``run``): it writes one message per log row on each channel the row's columns fill, so every
-channel holds as many messages as the CSV has rows, with the values the CSV has:
+(:class:`~ftcomp.session.log.LogObserver`, ``--log run.mcap`` of ``ftcomp stream``, ``record``,
+``run`` and ``sim place``), run on the observers' worker thread, off the loop's: it writes one
+message per log row on each channel the row's columns fill, so every channel holds as many
+messages as the session has rows, with the values its rows have:
 
 ==============================  ===================================  ===========================
 topic                           type                                 columns
@@ -35,13 +19,16 @@ topic                           type                                 columns
 ==============================  ===================================  ===========================
 
 A row's stamp (its ``t_ns``) is every message's log time and header stamp, except the wrenches
-of a ``run`` log, stamped with the sample's own time (``t_sample_s``).
+of a ``run`` or ``sim place`` log, stamped with the sample's own time (``t_sample_s``). Log times
+are the session clock: simulation time for ``sim://``, so a simulated run starts near
+1970-01-01 in a viewer.
 
 Writer: rosbags' rosbag2 writer with its MCAP storage, the library that reads the bags too: one
 dependency serialises (its typestore's CDR) and writes (profile ``ros2``, chunked, indexed, with
 a summary), and what it writes it reads back. It writes a rosbag2 *directory*; the MCAP file in it
 is self-contained (schemas, channels, messages), so :meth:`McapLog.close` moves that file to the
-requested path and removes the rest.
+requested path and removes the rest. :class:`McapLog` is that writer (channels, CDR messages, the
+file moved into place); :class:`SessionMcapLog` is the one that turns rows into messages.
 """
 
 from __future__ import annotations
@@ -52,7 +39,7 @@ import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import TYPE_CHECKING, Any
+from typing import Any, Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -62,16 +49,13 @@ from rosbags.typesys import Stores, get_typestore
 from ftcomp.errors import ParameterError
 from ftcomp.ros2.tf import clean_frame
 
-if TYPE_CHECKING:
-    from ftcomp.control.loop import Reading
-
 __all__ = ["CHANNEL_COLUMNS", "SESSION_TOPICS", "TOPICS", "McapLog", "RowLayout", "SessionMcapLog"]
 
 _NS = 1_000_000_000
 #: A message's numbers: a row's slice or an array.
 Values = Sequence[float] | NDArray[np.float64]
 WRENCH = "geometry_msgs/msg/WrenchStamped"
-#: Every topic a log holds, with its message type.
+#: The topics of a log's wrenches, pose and command, with their message types.
 TOPICS: dict[str, str] = {
     "/ftcomp/wrench_raw": WRENCH,
     "/ftcomp/wrench_compensated": WRENCH,
@@ -136,7 +120,7 @@ _EVENT_LEVELS = {"fault": 40, "contact": 30}
 
 
 class McapLog:
-    """Writes each control cycle to an MCAP file (see the module docstring).
+    """An MCAP file of ROS 2 messages on channels (see the module docstring).
 
     A context manager; leaving it (also by an exception) finishes the file with what was logged.
 
@@ -190,7 +174,7 @@ class McapLog:
         self._types[topic] = msgtype
         self.counts[topic] = 0
 
-    def __enter__(self) -> McapLog:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(
@@ -215,11 +199,6 @@ class McapLog:
         )
         header = self._header(t_ns, self.sensor_frame if frame is None else frame)
         return self._T[WRENCH](header=header, wrench=wrench)
-
-    def _tf(self, t_ns: int, p: NDArray[np.float64], R: NDArray[np.float64]) -> Any:
-        from scipy.spatial.transform import Rotation
-
-        return self._tf_quat(t_ns, p, Rotation.from_matrix(R).as_quat())
 
     def _tf_quat(self, t_ns: int, p: Values, q_xyzw: Values) -> Any:
         x, y, z, w = (float(v) for v in q_xyzw)
@@ -251,19 +230,6 @@ class McapLog:
         data = self._store.serialize_cdr(message, self._types[topic])
         self._writer.write(self._conns[topic], max(0, int(log_ns)), data)
         self.counts[topic] += 1
-
-    def __call__(self, reading: Reading, twist: NDArray[np.float64]) -> None:
-        """Log one cycle (the :func:`~ftcomp.control.loop.run_loop` sink signature)."""
-        now = max(0, int(reading.now_ns))
-        t_sample = max(0, int(reading.t_sample_ns))
-        self.write("/ftcomp/wrench_raw", now, self._wrench(t_sample, reading.wrench_raw_sensor))
-        self.write(
-            "/ftcomp/wrench_compensated",
-            now,
-            self._wrench(t_sample, reading.wrench_contact_sensor),
-        )
-        self.write("/tf", now, self._tf(now, reading.p_base_sensor, reading.R_base_sensor))
-        self.write("/ftcomp/twist_command", now, self._twist(now, np.asarray(twist, dtype=float)))
 
     def close(self) -> None:
         """Finish the MCAP file and move it into place (idempotent)."""

@@ -66,6 +66,8 @@ from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
 from ftcomp.model import GravityModel
 from ftcomp.session.compliant import CompliantStep, CycleRecord, SettleRule
+from ftcomp.session.log import LogObserver, ObserverThread
+from ftcomp.session.run import RUN_COLUMNS, cycle_row
 from ftcomp.session.verdicts import judge_placement
 
 __all__ = [
@@ -445,7 +447,7 @@ def run_placement(
     *,
     sensor: WrenchSensor | None = None,
     mount: Mount | None = None,
-    sinks: Sequence[Callable[[Reading, NDArray[np.float64]], None]] = (),
+    observers: Sequence[LogObserver] = (),
 ) -> PlacementResult:
     """Set the grasped load down on the surface; never raises on bad sensor data.
 
@@ -457,7 +459,10 @@ def run_placement(
         sensor: read this instead of ``cell.sensor`` (e.g. a fault-injecting
             :class:`~ftcomp.hardware.faults.FaultySensor`).
         mount: the sensor frame on the robot's TCP (identity by default).
-        sinks: run after each controlled cycle, ``sink(reading, twist)`` (e.g. an MCAP log).
+        observers: see each controlled cycle as a row of
+            :data:`~ftcomp.session.run.RUN_COLUMNS` (stamped with its ``now_ns``) and the end,
+            on a worker thread (e.g. an MCAP log,
+            :class:`~ftcomp.ros2.mcap_log.SessionMcapLog`), as ``ftcomp run``'s do.
 
     Returns:
         The timeseries and metrics (see :func:`write_placement_outputs`).
@@ -498,11 +503,20 @@ def run_placement(
         compensator=GravityCompensator(model) if config.compensation else None,
     )
     log = _PlacementLog(cell, config, up_base)
+    thread = ObserverThread(observers) if observers else None
+    if thread is not None:
+        thread.open(RUN_COLUMNS)
+
+    def on_cycle(record: CycleRecord) -> None:
+        log(record)
+        if thread is not None:  # the row built here: a simulated loop keeps no period
+            thread.row(record.reading.now_ns, cycle_row(record, log.t0_ns))
+
     compliant = CompliantStep(
         controller,
         robot,
         config.max_duration_s,
-        log,
+        on_cycle,
         settle=settle,
         nominal=None if admittance else log.nominal,
     )
@@ -519,10 +533,19 @@ def run_placement(
             return None
         return twist
 
-    run_loop(cycle, step, sinks=sinks)
+    try:
+        run_loop(cycle, step)
+    except BaseException:
+        if thread is not None:
+            thread.close()
+        raise
     outcome = outcome or {"settled": "placed", "duration": "timeout"}.get(
         compliant.outcome, compliant.outcome
     )
+    if thread is not None:
+        end_ns = log.t0_ns + round(log.rows[-1][0] * 1e9) if log.rows else 0
+        thread.event(end_ns, "fault" if compliant.faulted else "end", outcome)
+        thread.close()
     decision_index = log.decision_index if log.decision_index is not None else len(log.rows) - 1
     placed = outcome in ("placed", "depth_reached")
     if outcome == "depth_reached":  # hold still, then let go and lift

@@ -63,6 +63,7 @@ __all__ = [
     "LawName",
     "RunConfig",
     "RunResult",
+    "cycle_row",
     "run_compliant",
 ]
 
@@ -102,6 +103,24 @@ RUN_COLUMNS = (
     "wz",
     "sent",
 )
+
+
+def cycle_row(record: CycleRecord, t0_ns: int) -> list[float]:
+    """A compliant cycle as a row of :data:`RUN_COLUMNS`, its times from ``t0_ns`` [ns] (the
+    first cycle's ``now_ns``): what ``ftcomp run`` logs, and what a placement hands its
+    observers."""
+    r = record.reading
+    return [
+        (r.now_ns - t0_ns) * 1e-9,
+        (r.t_sample_ns - t0_ns) * 1e-9,
+        *r.wrench_raw_sensor.tolist(),
+        *r.wrench_contact_sensor.tolist(),
+        *quat_from_matrix(r.R_base_sensor),
+        *r.p_base_sensor.tolist(),
+        *record.error.tolist(),
+        *record.twist_base.tolist(),
+        1.0 if record.sent else 0.0,
+    ]
 
 
 @dataclass(frozen=True)
@@ -395,18 +414,8 @@ def run_compliant(
                 r = record.reading
                 if not t0_ns:
                     t0_ns.append(r.now_ns)
-                t_s = (r.now_ns - t0_ns[0]) * 1e-9
-                row = [
-                    t_s,
-                    (r.t_sample_ns - t0_ns[0]) * 1e-9,
-                    *r.wrench_raw_sensor.tolist(),
-                    *r.wrench_contact_sensor.tolist(),
-                    *quat_from_matrix(r.R_base_sensor),
-                    *r.p_base_sensor.tolist(),
-                    *record.error.tolist(),
-                    *record.twist_base.tolist(),
-                    1.0 if record.sent else 0.0,
-                ]
+                row = cycle_row(record, t0_ns[0])
+                t_s = row[0]
                 if load is not None:
                     row += load.update(t_s)
                 if tracker is not None:  # the same cycle's: the next read has not run yet
