@@ -10,7 +10,9 @@ A cycle is ``read sensor and pose -> compensate -> step -> command -> log``:
   sensor-origin twist to the robot as a TCP twist.
 - The *step* is any callable ``step(reading) -> twist | None``: the admittance controller of a
   placement, a recorder that commands nothing, an online estimator. ``None`` ends the loop.
-- *Sinks* are callables ``sink(reading, twist)`` run after the step (logs, live displays).
+- *Sinks* are callables ``sink(reading, twist)`` run after the step, on the loop's thread (a
+  ROS 2 publisher). Logs, MCAP, live views and progress are not sinks: a session hands its log
+  rows to its observers on their worker thread (:class:`~ftcomp.session.log.ObserverThread`).
 - :func:`run_loop` runs cycles until the step says stop; on any exit (also an exception or
   Ctrl-C) it stops the robot first.
 
