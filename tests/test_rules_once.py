@@ -38,15 +38,9 @@ _APPLICATIONS = ("cli/", "huang2020/")
 _FLAG = re.compile(r"(?<![\w-])--[a-zA-Z][a-zA-Z0-9-]*")
 
 #: Library messages still naming a flag: (module, flag).
-_PENDING_MESSAGES = {
-    # the twin's UR face (the twin's rewrite)
-    ("twin/ur_face.py", "--fault"),
-}
+_PENDING_MESSAGES: set[tuple[str, str]] = set()
 #: Range checks still in cli/: (module, the condition's source).
-_PENDING_RANGES = {
-    # --mount (cli/hardware_options.py, the device registry's rewrite)
-    ("hardware_options.py", "len(values) != 6 or not all((math.isfinite(v) for v in values))"),
-}
+_PENDING_RANGES: set[tuple[str, str]] = set()
 
 
 def _library_modules() -> list[tuple[str, ast.Module]]:

@@ -10,7 +10,6 @@ no pose).
 from __future__ import annotations
 
 import argparse
-import math
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
 from typing import TYPE_CHECKING
@@ -28,17 +27,14 @@ NO_ROBOT = "fixed://"
 
 
 def parse_mount(text: str) -> tuple[float, ...]:
-    """``"0,0,35,0,0,90"`` -> six numbers: x, y, z [mm], roll, pitch, yaw [deg]."""
+    """``"0,0,35,0,0,90"`` -> the numbers (six: x, y, z [mm], roll, pitch, yaw [deg]; the
+    count and range are :meth:`~ftcomp.hardware.protocols.Mount.from_mm_deg`'s to check)."""
     try:
-        values = tuple(float(v) for v in text.split(","))
+        return tuple(float(v) for v in text.split(","))
     except ValueError:
-        values = ()
-    if len(values) != 6 or not all(math.isfinite(v) for v in values):
         raise argparse.ArgumentTypeError(
-            "expected X,Y,Z,ROLL,PITCH,YAW (mm, deg), six numbers, e.g. 0,0,35,0,0,90; "
-            f"got {text!r}"
-        )
-    return values
+            f"expected comma-separated numbers X,Y,Z,ROLL,PITCH,YAW (mm, deg); got {text!r}"
+        ) from None
 
 
 def add_hardware_arguments(parser: argparse.ArgumentParser, *, robot_required: bool) -> None:
@@ -73,10 +69,7 @@ def mount_of(args: argparse.Namespace) -> Mount:
     """The :class:`~ftcomp.hardware.protocols.Mount` the options give."""
     from ftcomp.hardware.protocols import Mount
 
-    if args.mount is None:
-        return Mount()
-    x, y, z, roll, pitch, yaw = args.mount
-    return Mount.from_xyz_rpy((x * 1e-3, y * 1e-3, z * 1e-3), (roll, pitch, yaw))
+    return Mount() if args.mount is None else Mount.from_mm_deg(args.mount)
 
 
 @contextmanager

@@ -198,6 +198,23 @@ class Mount:
         R = Rotation.from_euler("xyz", rpy, degrees=True).as_matrix()
         return cls(R, np.asarray(xyz_m, dtype=float))
 
+    @classmethod
+    def from_mm_deg(cls, values: ArrayLike) -> Mount:
+        """From six numbers as a user types them: ``x, y, z`` [mm], fixed-axis ``roll, pitch,
+        yaw`` [deg] (:meth:`from_xyz_rpy`).
+
+        Raises:
+            ParameterError: not six finite numbers (naming the field ``mount``).
+        """
+        v = np.asarray(values, dtype=float)
+        if v.shape != (6,) or not np.all(np.isfinite(v)):
+            raise ParameterError(
+                "mount must be six finite numbers X,Y,Z,ROLL,PITCH,YAW (mm, deg), e.g. "
+                f"0,0,35,0,0,90; got {np.atleast_1d(v).tolist()}",
+                field="mount",
+            )
+        return cls.from_xyz_rpy(v[:3] * 1e-3, v[3:])
+
     def sensor_pose(
         self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

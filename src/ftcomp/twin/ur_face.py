@@ -196,7 +196,9 @@ class UrFace:
         if fault in ("rtde-stop", "network-loss"):
             self.silent = True
         elif fault == "protective-stop":
-            self.controller.protective_stop("protective stop on demand (--fault)")
+            self.controller.protective_stop(
+                "a protective stop on demand (the twin's protective-stop fault)"
+            )
         elif fault == "script-stop":
             self.controller.stop_program()
         elif fault == "latency":
