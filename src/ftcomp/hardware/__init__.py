@@ -1,20 +1,30 @@
 """The hardware seam: protocols a robot and a sensor implement, and the capabilities a backend
 may add to them (:mod:`.protocols`), backends by URI (:mod:`.registry`), pacing on the host's
-clock (:mod:`.pacing`) and fault injection (:mod:`.faults`)."""
+clock (:mod:`.pacing`) and fault injection (:mod:`.faults`).
 
-from ftcomp.hardware.protocols import (
-    ChecksReachability,
-    CountsLostPackets,
-    Mount,
-    PoseSample,
-    ReportsLateness,
-    ReportsStreamHealth,
-    Robot,
-    StreamHealth,
-    TakesControl,
-    WrenchSample,
-    WrenchSensor,
-)
+Names are imported when first used (PEP 562), so a module of the package imports only what it
+needs (``--help`` and the device registry load no numpy or scipy through here).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ftcomp.hardware.protocols import (
+        ChecksReachability,
+        CountsLostPackets,
+        Mount,
+        PoseSample,
+        ReportsLateness,
+        ReportsStreamHealth,
+        Robot,
+        StreamHealth,
+        TakesControl,
+        WrenchSample,
+        WrenchSensor,
+    )
 
 __all__ = [
     "ChecksReachability",
@@ -29,3 +39,23 @@ __all__ = [
     "WrenchSample",
     "WrenchSensor",
 ]
+
+_WHERE = {
+    "ChecksReachability": "ftcomp.hardware.protocols",
+    "CountsLostPackets": "ftcomp.hardware.protocols",
+    "Mount": "ftcomp.hardware.protocols",
+    "PoseSample": "ftcomp.hardware.protocols",
+    "ReportsLateness": "ftcomp.hardware.protocols",
+    "ReportsStreamHealth": "ftcomp.hardware.protocols",
+    "Robot": "ftcomp.hardware.protocols",
+    "StreamHealth": "ftcomp.hardware.protocols",
+    "TakesControl": "ftcomp.hardware.protocols",
+    "WrenchSample": "ftcomp.hardware.protocols",
+    "WrenchSensor": "ftcomp.hardware.protocols",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _WHERE:
+        raise AttributeError(f"module 'ftcomp.hardware' has no attribute {name!r}")
+    return getattr(importlib.import_module(_WHERE[name]), name)
