@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-import ftcomp.sim.backend
+import ftcomp.sim.cell_config
 from ftcomp.calibration.identify import calibrate
 from ftcomp.cli import main
 from ftcomp.compensation.online import LOAD_COLUMNS, LoadRls, OnlineSettings, estimate_columns
@@ -210,7 +210,7 @@ def test_run_compensates_a_load_grasped_during_the_run(
     monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.setattr(ftcomp.sim.backend, "SimCell", _GraspingCell)
+    monkeypatch.setattr(ftcomp.sim.cell_config, "SimCell", _GraspingCell)
     out = tmp_path / "run.csv"
     code = main(
         [

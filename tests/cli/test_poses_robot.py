@@ -9,7 +9,7 @@ from typing import Any, ClassVar
 import numpy as np
 import pytest
 
-import ftcomp.sim.backend
+import ftcomp.sim.cell_config
 from ftcomp.cli import main
 from ftcomp.io.poses_csv import read_pose_file
 from ftcomp.sim import SimCell
@@ -38,7 +38,7 @@ class _TrackedCell(SimCell):
 def test_a_robot_design_lists_poses_the_robot_reaches_at_the_stated_position(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(ftcomp.sim.backend, "SimCell", _TrackedCell)
+    monkeypatch.setattr(ftcomp.sim.cell_config, "SimCell", _TrackedCell)
     monkeypatch.setattr(_TrackedCell, "events", [])
     out = tmp_path / "poses.csv"
     argv = ["poses", "design", "--count", "6", "--robot", "sim://", "-o", str(out)]
