@@ -136,8 +136,8 @@ def test_the_simulated_cell_checks_reachability_without_changing_later_moves() -
     cell, twin = SimCell(), SimCell()
     assert cell.is_reachable(p, down)
     assert not cell.is_reachable(np.array([2.0, 0.0, 0.42]), down)  # 2 m out: beyond the arm
-    # The check draws its IK starts from a generator of its own: the cell's next solve is the
-    # same as that of a twin that never checked.
+    # The check changes nothing: the cell's next solve is the same as that of a twin that
+    # never checked.
     far = np.array([0.3, 0.35, 0.25])
     np.testing.assert_array_equal(cell.solve_ik(far, down), twin.solve_ik(far, down))
     np.testing.assert_array_equal(cell.q_command_rad, twin.q_command_rad)

@@ -151,6 +151,30 @@ def test_a_commanded_angular_velocity_turns_the_sensor_about_its_origin() -> Non
     assert np.linalg.norm(p1 - p0) < 2e-5
 
 
+def test_a_pose_the_reach_check_accepts_is_solved_whatever_the_arm_did_before() -> None:
+    # A design of issue 15 (poses design --robot sim://, qx qy qz qw in the order sim collect
+    # visits them): the check accepted all nine on a fresh cell, yet the moves' IK, started from
+    # the previous pose with random starts of its own, found no solution for the sixth.
+    # Every solve now tries the fixed starts the check tried, so a check's verdict holds.
+    xyzw = [
+        [0.559663643252, -0.418958955534, 0.119070960336, 0.705033408006],
+        [0.665676347785, -0.665676347785, -0.330494910645, 0.067254100528],
+        [-0.644689847911, 0.644689847911, -0.283645347830, 0.297145278701],
+        [0.241091269025, 0.241091269025, -0.615371821717, 0.710681026226],
+        [-0.302449249522, -0.165149784933, -0.864235612901, 0.366533498325],
+        [-0.251246890528, 0.251246890528, 0.802425072169, 0.479441345270],
+        [-0.156124949960, -0.156124949960, 0.433683118040, 0.873595417300],
+        [-0.660965203320, -0.660965203320, 0.246661045297, 0.255750520494],
+        [0.695970545354, 0.695970545354, 0.133937091517, 0.115372680978],
+    ]
+    p = np.array([0.441427, 0.0, 0.41565])
+    checker, mover = SimCell(), SimCell()
+    for R in Rotation.from_quat(xyzw).as_matrix():
+        assert checker.is_reachable(p, R)
+        assert mover.is_reachable(p, R), "the verdict does not depend on where the arm is"
+        mover.move_joints(mover.solve_ik(p, R), 0.2)
+
+
 def test_unreachable_pose_raises_an_error_naming_the_pose() -> None:
     cell = SimCell()
     with pytest.raises(UnreachablePoseError, match=r"pose 7 .*unreachable"):

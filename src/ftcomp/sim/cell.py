@@ -43,6 +43,12 @@ _JACOBIAN_REFRESH_RAD: Final = 1e-3
 #: Joint speed limit of the velocity interface [rad/s] (the C4's slowest axes reach ~7 rad/s).
 _MAX_JOINT_SPEED: Final = 3.0
 
+#: Seeds the random starts of the cell's inverse kinematics (:meth:`SimCell.solve_ik`), drawn
+#: once per cell: every solve, a move's or a reachability check's, tries the same starts.
+_IK_STARTS_SEED: Final = 20200301
+#: Random starts of the inverse kinematics, uniform within the joint ranges.
+_RANDOM_IK_STARTS: Final = 30
+
 #: Consecutive still cycles that make :meth:`SimCell.settle` call the cell at rest.
 _STILL_CYCLES: Final = 20
 _BADQACC: Final = int(mujoco.mjtWarning.mjWARN_BADQACC)
@@ -135,7 +141,12 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         self._dik = DifferentialIK(
             m, self._site, _DLS_DAMPING, refresh_rad=_JACOBIAN_REFRESH_RAD, chain=self._qs
         )
-        self._ik_rng = np.random.default_rng(20200301)
+        span = self._upper - self._lower
+        random_starts = self._lower + span * np.random.default_rng(_IK_STARTS_SEED).random(
+            (_RANDOM_IK_STARTS, n)
+        )
+        self._ik_starts = np.vstack([self._config.arm.home_q_rad, random_starts])
+        self._ik_starts.setflags(write=False)
         d = self._data
         d.qpos[self._qs] = q0
         d.ctrl[:] = q0

@@ -8,8 +8,8 @@ and ``moveL`` do. Poses are of the sensor frame in the robot's base frame.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, Final
+from collections.abc import Callable, Sequence
+from typing import Any, Final
 
 import mujoco
 import numpy as np
@@ -20,18 +20,11 @@ from ftcomp.errors import ParameterError, UnreachablePoseError
 from ftcomp.sim.arm import C4_HOME_Q_RAD
 from ftcomp.sim.ik import solve_pose
 
-if TYPE_CHECKING:
-    from ftcomp.sim.scene import SceneConfig
-
 __all__ = ["HOME_Q_RAD", "ArmMotion", "CycleCallback"]
 
 #: The C4-like arm's start configuration: tool pointing straight down in front of the robot
-#: [rad]. A cell starts at its arm's ``home_q_rad``, also the second seed of every IK solve.
+#: [rad]. A cell starts at its arm's ``home_q_rad``, also the first fixed start of every IK solve.
 HOME_Q_RAD: Final = C4_HOME_Q_RAD
-
-#: Seeds the random IK starts of a reachability check (its own generator, so a check does not
-#: change the starts of later moves).
-_REACH_CHECK_SEED: Final = 20200302
 
 #: Called after every control cycle of a blocking move (e.g. to record readings).
 CycleCallback = Callable[[Any], None]
@@ -48,7 +41,6 @@ class ArmMotion:
     """Blocking joint and Cartesian moves of the simulated arm (see the module docstring)."""
 
     # Set by SimCell.__init__.
-    _config: SceneConfig
     _model: mujoco.MjModel
     _data: mujoco.MjData
     _scratch: mujoco.MjData
@@ -61,7 +53,9 @@ class ArmMotion:
     _q_cmd: NDArray[np.float64]
     _qd_cmd: NDArray[np.float64]
     _R_world_base: NDArray[np.float64]
-    _ik_rng: np.random.Generator
+    #: The IK's fixed starts [rad], (K, N), read-only: the arm's ``home_q_rad``, then random
+    #: configurations within the joint ranges drawn once per cell.
+    _ik_starts: NDArray[np.float64]
 
     def stop(self) -> None:
         """Zero the commanded velocity (the cell's)."""
@@ -136,39 +130,51 @@ class ArmMotion:
     ) -> bool:
         """Whether inverse kinematics puts the TCP (the sensor frame) at this base-frame pose
         within the joint ranges (the :class:`~ftcomp.hardware.protocols.ChecksReachability`
-        capability). Checking moves nothing and leaves later moves' IK seeds as they were.
+        capability). Checking moves nothing and changes nothing.
+
+        The verdict does not depend on where the arm is: the check tries the cell's fixed starts
+        only, which every :meth:`solve_ik` tries too, so a pose found reachable here is one
+        :meth:`move_pose` reaches from wherever the arm then is (a pose design checked on one
+        cell is visited by another of the same arm, whatever its path).
 
         Raises:
             ParameterError: not a position (3,) [m] and a rotation (3, 3).
         """
         try:
-            self.solve_ik(p_base_tcp, R_base_tcp, rng=np.random.default_rng(_REACH_CHECK_SEED))
+            self._solve(p_base_tcp, R_base_tcp, list(self._ik_starts), "")
         except UnreachablePoseError:
             return False
         return True
 
     def solve_ik(
-        self,
-        p_base_sensor: ArrayLike,
-        R_base_sensor: ArrayLike,
-        *,
-        label: str = "",
-        rng: np.random.Generator | None = None,
+        self, p_base_sensor: ArrayLike, R_base_sensor: ArrayLike, *, label: str = ""
     ) -> NDArray[np.float64]:
         """Joint positions [rad] putting the sensor frame at a base-frame pose.
 
-        Tries the current command first (the nearest solution), then fixed and random seeds
-        (a fixed generator: the same pose gives the same answer whatever the noise seed).
+        Tries the current command first (the nearest solution), then the cell's fixed starts:
+        the arm's ``home_q_rad`` and random configurations drawn once when the cell was built
+        (the same starts for every solve, so the answer depends on the pose and the current
+        command only, and a pose :meth:`is_reachable` accepts is always solved).
 
         Args:
             p_base_sensor: position [m], base frame, (3,).
             R_base_sensor: orientation, (3, 3).
             label: names the pose in an error message.
-            rng: draws the random seeds (default: the cell's own generator, which advances).
 
         Raises:
-            UnreachablePoseError: no seed converges within the joint ranges.
+            UnreachablePoseError: no start converges within the joint ranges.
         """
+        return self._solve(p_base_sensor, R_base_sensor, [self._q_cmd, *self._ik_starts], label)
+
+    def _solve(
+        self,
+        p_base_sensor: ArrayLike,
+        R_base_sensor: ArrayLike,
+        starts: Sequence[NDArray[np.float64]],
+        label: str,
+    ) -> NDArray[np.float64]:
+        """:func:`~ftcomp.sim.ik.solve_pose` from ``starts`` (each (N,) [rad]), in the base
+        frame; raises :class:`UnreachablePoseError` naming ``label`` if none converges."""
         p = np.asarray(p_base_sensor, dtype=float)
         R = np.asarray(R_base_sensor, dtype=float)
         finite = bool(np.isfinite(p).all() and np.isfinite(R).all())
@@ -177,10 +183,6 @@ class ArmMotion:
         if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
             raise ParameterError(f"{label or 'pose'}: R_base_sensor is not a rotation matrix")
         Rwb = self._R_world_base
-        span = self._upper - self._lower
-        draw = self._ik_rng if rng is None else rng
-        seeds = [self._q_cmd, np.array(self._config.arm.home_q_rad)]
-        seeds += [self._lower + span * draw.random(span.shape[0]) for _ in range(30)]
         mujoco.mj_copyData(self._scratch, self._model, self._data)
         q = solve_pose(
             self._model,
@@ -190,7 +192,7 @@ class ArmMotion:
             self._dof_adr,
             Rwb @ p,
             Rwb @ R,
-            seeds,
+            starts,
             self._lower,
             self._upper,
         )
