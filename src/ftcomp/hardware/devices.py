@@ -220,10 +220,12 @@ BUILT_IN: Final[tuple[Device, ...]] = (
         "robot",
         "ros2",
         "ftcomp.ros2.live:open_robot",
-        "ros2:///TOPIC",
-        "the sensor's pose from a ROS 2 topic (Cyclone DDS)",
+        "ros2:///?base_frame=B&tcp_frame=S&twist_topic=TOPIC",
+        "an arm in a ROS 2 graph: its pose from JointState and the URDF, driven by "
+        "TwistStamped on a servo topic (rclpy; docs/ros2.md)",
         extra="ros2",
-        tested="Cyclone DDS peers of ftcomp's own (docs/ros2.md)",
+        tested="rclpy nodes on loopback (joint states, a latched /robot_description); no "
+        "ROS 2 driver of a real arm",
     ),
     Device(
         "sensor",
@@ -298,9 +300,9 @@ BUILT_IN: Final[tuple[Device, ...]] = (
         "ros2",
         "ftcomp.ros2.live:open_sensor",
         "ros2:///TOPIC",
-        "a geometry_msgs/WrenchStamped topic (Cyclone DDS)",
+        "a geometry_msgs/WrenchStamped topic (rclpy; docs/ros2.md)",
         extra="ros2",
-        tested="Cyclone DDS peers of ftcomp's own (docs/ros2.md)",
+        tested="rclpy publishers on loopback (ROS 2 Kilted wheels); no vendor driver",
     ),
 )
 

@@ -6,8 +6,8 @@
   (``ftcomp import-bag``) with the still segments of :mod:`ftcomp.calibration.still`.
 - :mod:`.export` writes a calibration as ros2_control parameters (``ftcomp export ros2``).
 - :mod:`.mcap_log` logs control loops as MCAP in the ROS 2 profile (``sim place --log``).
-- :mod:`.live` and :mod:`.dds_types`: ``ros2://`` topics over Cyclone DDS (experimental; the
-  optional extra ``ftcomp[ros2]``).
+- :mod:`.rclpy_runtime` and :mod:`.live`: ``ros2://`` live topics through rclpy (a sourced ROS 2
+  or the optional extra ``ftcomp[ros2]``).
 
 Nothing is imported here, so ``import ftcomp.ros2`` needs none of the optional libraries.
 """

@@ -1,0 +1,166 @@
+"""ROS 2 nodes for the live tests, each in its own process, written with rclpy alone.
+
+``python rclpy_peer.py publish SECONDS [FRAME] [--description]``: node ``sensor_driver``
+publishing ``/ft_raw`` (WrenchStamped, reliable, 200 Hz; reading k is
+``MODEL.predict(R_BASE_SENSOR) + contact(k)`` stamped ``EPOCH_NS + k * 5 ms`` in FRAME, default
+``ft_sensor``) and ``/joint_states`` (JointState, 100 Hz, :data:`Q` on the two joints of
+:data:`URDF`); with ``--description``, also ``/robot_description`` latched (transient local),
+as robot_state_publisher does.
+
+``python rclpy_peer.py subscribe TOPIC COUNT SECONDS OUT.json``: node ``listener`` collecting
+WrenchStamped on TOPIC until COUNT messages or SECONDS passed; writes
+``[[stamp_ns, frame_id, fx, ..., tz], ...]``.
+
+``python rclpy_peer.py rebias OUT.json``: node ``client`` calling ``/ftcomp/rebias``
+(std_srvs/Trigger), writing ``[success, message]``.
+
+The environment (the test's) pins them to loopback and sets ROS_DOMAIN_ID.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+
+import numpy as np
+import rclpy
+from geometry_msgs.msg import WrenchStamped
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from scipy.spatial.transform import Rotation
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String
+from std_srvs.srv import Trigger
+
+from ftcomp.model import GravityModel
+
+EPOCH_NS = 1_700_000_000_000_000_000
+PERIOD_NS = 5_000_000
+MODEL = GravityModel(
+    3.153,
+    np.array([0.0001, -0.0003, 0.047]),
+    np.array([-0.8613, 1.1015, 0.1976]),
+    np.array([-0.0002, -0.0605, 0.0255]),
+    tilt_U_rad=np.radians(-2.0),
+    tilt_V_rad=np.radians(1.5),
+)
+#: A two-joint arm: base -> (yaw about z) -> link1 -> (pitch about y) -> link2 -> fixed
+#: flip about x -> ft_sensor.
+URDF = """<?xml version="1.0"?>
+<robot name="two_joint">
+  <link name="base"/><link name="link1"/><link name="link2"/><link name="ft_sensor"/>
+  <joint name="yaw" type="revolute">
+    <parent link="base"/><child link="link1"/>
+    <origin xyz="0 0 0.3" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="9" velocity="3"/>
+  </joint>
+  <joint name="pitch" type="revolute">
+    <parent link="link1"/><child link="link2"/>
+    <origin xyz="0.4 0 0" rpy="0 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="9" velocity="3"/>
+  </joint>
+  <joint name="mount" type="fixed">
+    <parent link="link2"/><child link="ft_sensor"/>
+    <origin xyz="0 0 -0.1" rpy="3.141592653589793 0 0"/>
+  </joint>
+</robot>
+"""
+#: The joint positions the publisher holds [rad]: yaw, pitch.
+Q = (0.5236, 0.3491)
+#: The sensor's orientation at :data:`Q`, written out from the URDF by hand.
+R_BASE_SENSOR = (
+    Rotation.from_euler("z", Q[0])
+    * Rotation.from_euler("y", Q[1])
+    * (Rotation.from_euler("x", np.pi))
+)
+
+
+def contact(k: int) -> np.ndarray:
+    """The contact wrench of reading k [N, N*m]: what compensation must give back."""
+    return np.array([0.5, -1.0, 2.0, 0.01, -0.02, 0.03]) + 0.001 * k
+
+
+def _stamp(msg_stamp: object, t_ns: int) -> None:
+    msg_stamp.sec, msg_stamp.nanosec = divmod(t_ns, 10**9)  # type: ignore[attr-defined]
+
+
+def publish(seconds: float, frame: str, description: bool) -> None:
+    node = Node("sensor_driver")
+    reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    wrenches = node.create_publisher(WrenchStamped, "/ft_raw", reliable)
+    joints = node.create_publisher(JointState, "/joint_states", reliable)
+    if description:
+        latched = QoSProfile(
+            depth=1,
+            reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL,
+        )
+        node.create_publisher(String, "/robot_description", latched).publish(String(data=URDF))
+    predicted = MODEL.predict(R_BASE_SENSOR.as_matrix())
+    end = time.monotonic() + seconds
+    k = 0
+    while time.monotonic() < end:
+        msg = WrenchStamped()
+        _stamp(msg.header.stamp, EPOCH_NS + k * PERIOD_NS)
+        msg.header.frame_id = frame
+        w = (predicted + contact(k)).tolist()
+        f, m = msg.wrench.force, msg.wrench.torque
+        f.x, f.y, f.z, m.x, m.y, m.z = w
+        wrenches.publish(msg)
+        if k % 2 == 0:
+            js = JointState(name=["yaw", "pitch"], position=list(Q))
+            _stamp(js.header.stamp, time.time_ns())
+            joints.publish(js)
+        rclpy.spin_once(node, timeout_sec=0)
+        k += 1
+        time.sleep(PERIOD_NS / 1e9)
+    node.destroy_node()
+
+
+def subscribe(topic: str, count: int, seconds: float, out: str) -> None:
+    node = Node("listener")
+    got: list[list[object]] = []
+
+    def on_msg(msg: WrenchStamped) -> None:
+        f, m = msg.wrench.force, msg.wrench.torque
+        stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+        got.append([stamp, msg.header.frame_id, f.x, f.y, f.z, m.x, m.y, m.z])
+
+    qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
+    node.create_subscription(WrenchStamped, topic, on_msg, qos)
+    end = time.monotonic() + seconds
+    while time.monotonic() < end and len(got) < count:
+        rclpy.spin_once(node, timeout_sec=0.05)
+    with open(out, "w", encoding="utf-8") as handle:
+        json.dump(got, handle)
+    node.destroy_node()
+
+
+def rebias(out: str) -> None:
+    node = Node("client")
+    client = node.create_client(Trigger, "/ftcomp/rebias")
+    result: list[object] = [False, "service not available"]
+    if client.wait_for_service(timeout_sec=20.0):
+        future = client.call_async(Trigger.Request())
+        rclpy.spin_until_future_complete(node, future, timeout_sec=30.0)
+        if future.result() is not None:
+            result = [future.result().success, future.result().message]
+    with open(out, "w", encoding="utf-8") as handle:
+        json.dump(result, handle)
+    node.destroy_node()
+
+
+if __name__ == "__main__":
+    rclpy.init()
+    try:
+        mode = sys.argv[1]
+        if mode == "publish":
+            frame = next((a for a in sys.argv[3:] if not a.startswith("--")), "ft_sensor")
+            publish(float(sys.argv[2]), frame, "--description" in sys.argv)
+        elif mode == "subscribe":
+            subscribe(sys.argv[2], int(sys.argv[3]), float(sys.argv[4]), sys.argv[5])
+        else:
+            rebias(sys.argv[2])
+    finally:
+        rclpy.try_shutdown()
