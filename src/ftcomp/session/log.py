@@ -193,12 +193,18 @@ class CsvLog:
         self._later.append((row, t_ns))
 
     def flush(self) -> None:
-        """Write the rows kept by :meth:`write_later`, in order."""
+        """Write the rows kept by :meth:`write_later`, in order. Each is taken off the list
+        before it is written, so a flush cut short (Ctrl-C lands anywhere in the loop, its
+        slack too) leaves the rest for the next one and writes no row twice."""
         later = self._later
         if later:
-            for row, t_ns in later:
-                self.write(row, t_ns)
-            later.clear()
+            done = 0
+            try:
+                for row, t_ns in later:
+                    done += 1
+                    self.write(row, t_ns)
+            finally:
+                del later[:done]
 
     def event(self, t_ns: int, kind: str, text: str) -> None:
         """Tell the observer of an event (see :meth:`LogObserver.event`); no row is written."""

@@ -1,0 +1,34 @@
+"""A live session's CSV log: rows kept for the slack and flushed, never written twice."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from ftcomp.session.log import csv_log
+
+
+def test_a_flush_cut_short_by_ctrl_c_writes_no_row_twice(tmp_path: Path) -> None:
+    path = tmp_path / "log.csv"
+    with csv_log(path, ("t", "x")) as log:
+        for k in range(5):
+            log.write_later([float(k), 10.0 * k])
+        write, calls = log.write, [0]
+
+        def interrupted(row: Any, t_ns: int | None = None) -> None:
+            calls[0] += 1
+            if calls[0] == 3:  # Ctrl-C while the third row is formatted
+                raise KeyboardInterrupt
+            write(row, t_ns)
+
+        log.write = interrupted  # type: ignore[method-assign]
+        with pytest.raises(KeyboardInterrupt):
+            log.flush()
+        log.write = write  # type: ignore[method-assign]
+    rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    # The row being formatted is lost; the others are written once each, in order.
+    assert rows[:, 0].tolist() == [0.0, 1.0, 3.0, 4.0]
+    assert log.rows == 4
