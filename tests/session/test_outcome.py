@@ -16,9 +16,9 @@ def test_every_protective_stop_is_an_outcome_and_a_fault(reason: StopReason) -> 
     assert outcome == reason.value and outcome.protective_stop and outcome.faulted
 
 
-def test_only_the_time_a_settled_contact_or_a_replay_running_out_end_a_session_normally() -> None:
+def test_only_the_time_a_settled_contact_a_replay_run_out_or_every_pose_end_normally() -> None:
     normal = {o for o in Outcome if not o.faulted}
-    assert normal == {Outcome.DURATION, Outcome.SETTLED, Outcome.END_OF_REPLAY}
+    assert normal == {Outcome.DURATION, Outcome.SETTLED, Outcome.END_OF_REPLAY, Outcome.COMPLETE}
     assert Outcome.LOOP_LATE.faulted and Outcome.INTERRUPTED.faulted and Outcome.ERROR.faulted
     assert not any(o.protective_stop for o in (Outcome.LOOP_LATE, Outcome.ERROR))
 

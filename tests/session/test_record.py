@@ -142,7 +142,7 @@ def test_a_fault_after_the_first_pose_keeps_the_poses_so_far_and_stops_the_robot
     error = HardwareError("ur://127.0.0.1: lost the connection")
     cell = FakeCell(TRUE_MODEL, rng, fail_at_move=3, error=error)
     result = record(cell, cell, driven(tmp_path / "s.csv"))
-    assert result.ended == "fault" and "lost the connection" in result.reason
+    assert result.ended == "error" and result.faulted and "lost the connection" in result.reason
     assert result.poses_recorded == 2 and cell.stops >= 1
     kept = read_samples(result.output)
     assert kept.pose is not None and sorted(set(kept.pose)) == ["1", "2"]

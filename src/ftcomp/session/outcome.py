@@ -1,9 +1,10 @@
 """Why a live session ended, and whether that was a fault: one type and one predicate.
 
-Every live session that runs the loop says how it ended with an :class:`Outcome`: ``ftcomp run``
-and the compliant step under it (:class:`~ftcomp.session.compliant.CompliantStep`, which
-placements map to their own verdicts), and ``ftcomp stream``. A session ends normally when its
-time is up, its contact settled or a replayed recording ran out; every other ending is a fault
+Every live session says how it ended with an :class:`Outcome`: ``ftcomp run`` and the compliant
+step under it (:class:`~ftcomp.session.compliant.CompliantStep`, which placements map to their
+own verdicts), ``ftcomp stream`` and ``ftcomp record``. A session ends normally when its time is
+up, its contact settled, a replayed recording ran out or a recording has every pose it planned;
+every other ending is a fault
 (:attr:`Outcome.faulted`), and the robot has been stopped: a protective stop of the controller
 (one member per :class:`~ftcomp.control.safety.StopReason`, with its value), a loop too late,
 an error of the hardware or the loop, or Ctrl-C.
@@ -30,6 +31,8 @@ class Outcome(enum.StrEnum):
     SETTLED = "settled"
     #: A replayed recording ran out (normal).
     END_OF_REPLAY = "end_of_replay"
+    #: A calibration recording has every pose it planned (normal).
+    COMPLETE = "complete"
     #: The loop fell too many periods behind the robot's schedule (a fault).
     LOOP_LATE = "loop_late"
     #: Ctrl-C (the session was cut short).
@@ -58,7 +61,7 @@ class Outcome(enum.StrEnum):
     @property
     def faulted(self) -> bool:
         """Whether the session ended on a fault (the one predicate): anything but its
-        duration, a settled contact or the end of a replayed recording."""
+        duration, a settled contact, the end of a replayed recording or a complete recording."""
         return self not in _NORMAL
 
     @property
@@ -67,5 +70,5 @@ class Outcome(enum.StrEnum):
         return self.value in _STOPS
 
 
-_NORMAL = frozenset({Outcome.DURATION, Outcome.SETTLED, Outcome.END_OF_REPLAY})
+_NORMAL = frozenset({Outcome.DURATION, Outcome.SETTLED, Outcome.END_OF_REPLAY, Outcome.COMPLETE})
 _STOPS = frozenset(reason.value for reason in StopReason)

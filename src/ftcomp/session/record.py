@@ -13,8 +13,9 @@ in one of two ways given by the :class:`RecordConfig`'s plan:
 
 The sample file is rewritten (atomically) after every pose, so Ctrl-C, a lost connection or a
 sensor fault leaves a valid file with every pose recorded so far. The session then stops the
-robot and returns a :class:`RecordResult` saying how it ended (``"complete"``,
-``"interrupted"`` or ``"fault"`` with the reason) and what it recorded. A failure before the
+robot and returns a :class:`RecordResult` saying how it ended (an
+:class:`~ftcomp.session.outcome.Outcome`: ``COMPLETE``, ``INTERRUPTED`` or ``ERROR`` with the
+reason) and what it recorded. A failure before the
 first pose is recorded (an unreachable pose, a silent sensor) is raised instead: there is
 nothing to keep.
 """
@@ -25,7 +26,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal, get_args
+from typing import get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,6 +45,7 @@ from ftcomp.samples import PoseList, Samples
 from ftcomp.session.hand_guided import ManualRecorder, StillCriteria
 from ftcomp.session.interrupts import InterruptHold
 from ftcomp.session.log import LogObserver, ObserverThread, save_timing
+from ftcomp.session.outcome import Outcome
 from ftcomp.session.pose_record import (
     PoseEvent,
     PoseRecord,
@@ -66,8 +68,8 @@ __all__ = [
 #: Most readings per pose (about 80 s of a 1.2 kHz sensor; memory stays under 1 GB).
 MAX_SAMPLES_PER_POSE = 100_000
 
-#: How a session ended.
-Ending = Literal["complete", "interrupted", "fault"]
+#: How a recording may end.
+ENDINGS = (Outcome.COMPLETE, Outcome.INTERRUPTED, Outcome.ERROR)
 
 
 @dataclass(frozen=True)
@@ -186,7 +188,8 @@ class RecordResult:
 
     Attributes:
         output: the sample CSV (written when at least one pose was recorded).
-        ended: ``"complete"`` (every planned pose), ``"interrupted"`` (Ctrl-C) or ``"fault"``.
+        ended: :class:`~ftcomp.session.outcome.Outcome` ``COMPLETE`` (every planned pose),
+            ``INTERRUPTED`` (Ctrl-C) or ``ERROR`` (a fault: see ``reason``).
         reason: why it ended early, one line ("" when complete).
         records: the poses recorded, in order (all of them are in ``output``).
         samples: the same readings as one :class:`~ftcomp.samples.Samples` (None without any).
@@ -198,7 +201,7 @@ class RecordResult:
     """
 
     output: Path
-    ended: Ending
+    ended: Outcome
     reason: str
     records: tuple[PoseRecord, ...] = field(repr=False)
     samples: Samples | None = field(repr=False)
@@ -207,14 +210,20 @@ class RecordResult:
     timing: TimingSummary | None = None
 
     def __post_init__(self) -> None:
-        if self.ended not in get_args(Ending):
-            raise ParameterError(f"ended must be one of {get_args(Ending)}, got {self.ended!r}")
-        if (self.ended == "complete") != (self.reason == ""):
+        if self.ended not in ENDINGS:
+            raise ParameterError(f"ended must be one of {', '.join(ENDINGS)}, got {self.ended!r}")
+        object.__setattr__(self, "ended", Outcome(self.ended))
+        if (self.ended is Outcome.COMPLETE) != (self.reason == ""):
             raise ParameterError("a reason is given exactly when the session did not complete")
         if (self.samples is None) != (not self.records):
             raise ParameterError("samples are given exactly when poses were recorded")
         if not self.duration_s >= 0.0:
             raise ParameterError(f"duration_s must be >= 0, got {self.duration_s}")
+
+    @property
+    def faulted(self) -> bool:
+        """Whether a fault or Ctrl-C ended it (:attr:`~ftcomp.session.outcome.Outcome.faulted`)."""
+        return self.ended.faulted
 
     @property
     def poses_recorded(self) -> int:
@@ -323,7 +332,7 @@ def record(
         recorded(PoseEvent("recorded", len(file.records) + 1, angle, record))
 
     start = time.monotonic()
-    ended: Ending = "fault"
+    ended = Outcome.ERROR
     reason = "the session failed before its first pose"  # unless _run_plan returns
     clock = loop_clock(robot, "ftcomp record") if isinstance(plan, HandGuided) else None
     with InterruptHold() as hold:
@@ -333,7 +342,7 @@ def record(
             hold.finishing(f"finishing {output}")
             if thread is not None:
                 last_ns = int(file.records[-1].t_ns[-1]) if file.records else 0
-                thread.event(last_ns, "end" if ended == "complete" else "fault", reason or ended)
+                thread.event(last_ns, "fault" if ended.faulted else "end", reason or ended)
                 thread.close()
         summary = clock.summary() if clock is not None and clock.timing.cycles else None
         if summary is not None and file.records:
@@ -359,9 +368,9 @@ def _run_plan(
     recorded: Callable[[PoseEvent], None],
     file: _SampleFile,
     clock: LoopClock | None,
-) -> tuple[Ending, str]:
+) -> tuple[Outcome, str]:
     """Record the plan; how it ended and why (see :func:`record`), the robot stopped."""
-    ended: Ending = "complete"
+    ended = Outcome.COMPLETE
     reason = ""
     try:
         if isinstance(plan, RobotDriven):
@@ -385,18 +394,20 @@ def _run_plan(
             cycle = ControlCycle(robot, sensor, mount=mount, every_reading=True)
             run_loop(cycle, recorder, clock=clock)
     except KeyboardInterrupt:
-        ended, reason = "interrupted", "interrupted (Ctrl-C)"
+        ended, reason = Outcome.INTERRUPTED, "interrupted (Ctrl-C)"
     except FtcompError as exc:
         if not file.records:
             _stop(robot)  # nothing to keep: the error is the answer
             raise
-        ended, reason = "fault", str(exc)
+        ended, reason = Outcome.ERROR, str(exc)
     except BaseException:
         _stop(robot)  # anything else (a failed write, a bug): stop the arm, then let it through
         raise
     stopped = _stop(robot)
     if stopped:
         ended, reason = (
-            ("fault", stopped) if ended == "complete" else (ended, f"{reason}; {stopped}")
+            (Outcome.ERROR, stopped)
+            if ended is Outcome.COMPLETE
+            else (ended, f"{reason}; {stopped}")
         )
     return ended, reason
