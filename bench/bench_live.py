@@ -37,6 +37,7 @@ period, p99 compute <= 25 % of the period.
 from __future__ import annotations
 
 import argparse
+import collections
 import json
 import os
 import select
@@ -44,8 +45,10 @@ import subprocess
 import sys
 import tarfile
 import tempfile
+import threading
 import time
 from pathlib import Path
+from typing import IO
 
 import numpy as np
 
@@ -79,6 +82,15 @@ def _calibration(folder: Path) -> Path:
     return path
 
 
+#: The twin's last output lines (its final line, what it served).
+_TWIN_LINES: collections.deque[str] = collections.deque(maxlen=50)
+
+
+def _keep_last(stream: IO[str] | None) -> None:
+    for line in stream or ():
+        _TWIN_LINES.append(line.rstrip())
+
+
 def _start_twin(seconds: float, sensor_rate_hz: float) -> subprocess.Popen[str]:
     env = {**os.environ, "PYTHONPATH": str(REPO / "src")}
     twin = subprocess.Popen(
@@ -92,6 +104,11 @@ def _start_twin(seconds: float, sensor_rate_hz: float) -> subprocess.Popen[str]:
     if not line.startswith("twin ready"):
         twin.kill()
         raise SystemExit(f"ftcomp twin did not start: {line!r}")
+    # Read the twin's output all along, keeping the last lines: a pipe nobody reads fills
+    # (64 KiB) and then blocks the twin's loop, which a late-cycle line a second fills in
+    # about ten minutes.
+    for stream in (twin.stdout, twin.stderr):
+        threading.Thread(target=_keep_last, args=(stream,), daemon=True).start()
     return twin
 
 
@@ -221,8 +238,9 @@ def main() -> None:
                             print(f"  {name if i == 0 else '':>10}  {line}")
         finally:
             twin.terminate()
-            final = twin.communicate(timeout=30)[0].strip().splitlines()
-            print(f"\n{final[-1] if final else 'the twin printed nothing'}")
+            twin.wait(timeout=30)
+            served = [line for line in _TWIN_LINES if line.startswith("twin served")]
+            print(f"\n{served[-1] if served else 'the twin printed nothing'}")
 
 
 if __name__ == "__main__":
