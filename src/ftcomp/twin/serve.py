@@ -189,7 +189,7 @@ class TwinResult:
         sensor_served: what the sensor face served (``50213 RDT records``).
         reason: why it ended (``time``, ``signal``).
         realtime: whether the loop got real-time priority (SCHED_FIFO).
-        timing: the loop's timing (:class:`~ftcomp.control.timing.TimingSummary`, as every
+        timing: the loop's timing (:class:`~ftcomp.hardware.pacing.TimingSummary`, as every
             live loop of ftcomp reports it).
     """
 
