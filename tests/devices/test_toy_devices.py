@@ -64,7 +64,7 @@ def test_the_command_line_offers_the_new_devices(env: dict[str, str]) -> None:
         "--fault", "toybot-silent", "--seconds", "1",
     )  # fmt: skip
     assert refused.returncode == 2 and refused.stderr.count("\n") == 1, refused.stderr
-    assert "'toybot-silent' is not a fault of ur5e with netft" in refused.stderr
+    assert "--fault: 'toybot-silent' is declared by neither ur5e nor netft" in refused.stderr
 
 
 def test_the_conformance_suite_runs_every_pair_and_the_toy_pair_passes(

@@ -15,8 +15,8 @@ BASE = ("twin", "--robot-host", "127.0.0.5", "--sensor-host", "127.0.0.6", "--se
     ("args", "message"),
     [
         (("--robot-host", "10.0.0.1"), "outside 127.0.0.0/8"),
-        (("--robot", "ur10"), "unknown 'ur10'"),
-        (("--surface", "glass"), "unknown 'glass'"),
+        (("--robot", "ur10"), "--robot: unknown 'ur10'"),
+        (("--surface", "glass"), "--surface must be one of none, sponge, book, got 'glass'"),
         (("--load-kg", "100"), "--load-kg must be"),
         (("--tcp-offset-mm", "1,2"), "--tcp-offset-mm"),
         (("--tcp-offset-mm", "0,0,nan"), "--tcp-offset-mm must be"),

@@ -23,7 +23,7 @@ def test_twin_refuses_a_sensor_rate_outside_a_net_fts_range(
     args = ("--robot-host", "127.0.0.5", "--sensor-host", "127.0.0.6", "--seconds", "1")
     assert main(["twin", *args, "--sensor-rate-hz", rate]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("error: sensor_rate_hz must be in (0, 7000] Hz"), err
+    assert err.startswith("error: --sensor-rate-hz must be in (0, 7000] Hz"), err
     assert err.count("\n") == 1
 
 

@@ -123,25 +123,38 @@ class TwinConfig:
             try:
                 address = ipaddress.IPv4Address(host)
             except ValueError:
-                raise ParameterError(f"{name}: {host!r} is not an IPv4 address") from None
+                raise ParameterError(
+                    f"{name}: {host!r} is not an IPv4 address", field=name
+                ) from None
             if not address.is_loopback:
-                raise ParameterError(f"{name}: {host} is outside 127.0.0.0/8 (loopback only)")
+                raise ParameterError(
+                    f"{name}: {host} is outside 127.0.0.0/8 (loopback only)", field=name
+                )
         if self.robot_host == self.sensor_host:
-            raise ParameterError("robot_host and sensor_host must differ")
+            raise ParameterError(
+                "robot_host and sensor_host must differ", field=("robot_host", "sensor_host")
+            )
         if not (math.isfinite(self.seconds) and 0.0 < self.seconds <= 86400.0):
-            raise ParameterError(f"seconds must be in (0, 86400], got {self.seconds}")
+            raise ParameterError(
+                f"seconds must be in (0, 86400], got {self.seconds}", field="seconds"
+            )
         for kind, name in (("robot", self.robot), ("sensor", self.sensor)):
             faces = twin_faces(kind)  # type: ignore[arg-type]
             if name not in faces:
-                raise ParameterError(f"{kind}: unknown {name!r}; known: {', '.join(faces)}")
+                raise ParameterError(
+                    f"{kind}: unknown {name!r}; known: {', '.join(faces)}", field=kind
+                )
         faults = pair_faults(self.robot, self.sensor)
         if self.fault is not None and self.fault not in faults:
             raise ParameterError(
-                f"fault: {self.fault!r} is not a fault of {self.robot} with {self.sensor}; "
-                f"known: {', '.join(faults)}"
+                f"fault: {self.fault!r} is declared by neither {self.robot} nor {self.sensor}; "
+                f"their faults: {', '.join(faults)}",
+                field="fault",
             )
         if not (math.isfinite(self.fault_at_s) and self.fault_at_s >= 0.0):
-            raise ParameterError(f"fault_at_s must be >= 0, got {self.fault_at_s}")
+            raise ParameterError(
+                f"fault_at_s must be >= 0, got {self.fault_at_s}", field="fault_at_s"
+            )
         most = self.sensor_face().twin.max_rate_hz  # type: ignore[union-attr]
         rate = self.sensor_rate_hz
         if rate is not None and not (
@@ -149,7 +162,8 @@ class TwinConfig:
         ):
             bound = f"{most:g}]" if most is not None else "inf)"
             raise ParameterError(
-                f"sensor_rate_hz must be in (0, {bound} Hz for {self.sensor}, got {rate:g}"
+                f"sensor_rate_hz must be in (0, {bound} Hz for {self.sensor}, got {rate:g}",
+                field="sensor_rate_hz",
             )
 
     def robot_face(self) -> Device:
