@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -167,12 +168,27 @@ def test_a_failure_before_the_first_pose_is_raised_and_writes_nothing(
     assert not (tmp_path / "s.csv").exists() and cell.stops >= 1
 
 
-def test_a_pose_out_of_reach_is_refused_before_anything_moves(
+def test_a_pose_out_of_reach_is_skipped_with_a_line_and_the_session_goes_on(
     tmp_path: Path, rng: np.random.Generator
 ) -> None:
     cell = ReachesNotTheThird(TRUE_MODEL, rng)
-    with pytest.raises(UnreachablePoseError, match=r"pose 3 of .* nothing was moved"):
-        record(cell, cell, driven(tmp_path / "s.csv"))
+    lines: list[str] = []
+    result = record(cell, cell, driven(tmp_path / "s.csv"), on_skip=lines.append)
+    assert len(lines) == 1 and re.search(
+        r"pose 3 of .* skipped: the robot does not reach", lines[0]
+    )
+    assert result.ended == "complete" and result.poses_recorded == 8
+    kept = read_samples(result.output)
+    assert kept.pose is not None and "3" not in set(kept.pose) and len(set(kept.pose)) == 8
+
+
+def test_a_pose_file_the_robot_reaches_none_of_is_refused_before_anything_moves(
+    tmp_path: Path, rng: np.random.Generator
+) -> None:
+    cell = ReachesNotTheThird(TRUE_MODEL, rng)
+    third = PoseList(("3",), paper_poses().rotations[2:3], "third.csv")
+    with pytest.raises(UnreachablePoseError, match=r"no pose of third.csv .* nothing was moved"):
+        record(cell, cell, driven(tmp_path / "s.csv", third))
     assert cell.moves == 0 and not (tmp_path / "s.csv").exists()
 
 

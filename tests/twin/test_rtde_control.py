@@ -116,3 +116,53 @@ def test_a_moveL_that_a_joint_limit_holds_ends_the_program_as_a_ur_controller_do
         held = robot.pose()
         time.sleep(0.2)
         assert np.linalg.norm(robot.pose().p_base_tcp - held.p_base_tcp) < 1e-4
+
+
+def test_moveJ_moves_every_joint_to_its_target_and_reports_done(clients) -> None:
+    """The twin once answered moveJ True and left the arm where it was."""
+    control, receive = clients
+    q0 = np.array(receive.getActualQ())
+    q1 = q0 + np.radians([10.0, -8.0, 6.0, 12.0, -9.0, 45.0])
+    assert control.moveJ(q1.tolist(), 1.05, 1.4)
+    # the servos hold within 0.01 deg (stiff PD loops under the arm's own weight)
+    assert np.all(np.abs(np.array(receive.getActualQ()) - q1) < np.radians(0.01))
+    assert control.moveJ(q0.tolist(), 1.05, 1.4)
+
+
+def test_getInverseKinematics_answers_the_solution_nearest_qnear(clients) -> None:
+    """The pose where a moveJ put the arm, back through the inverse kinematics near the joints
+    there: the same joints (to 1e-6 rad: the solver's 1e-9 m tolerance over the arm's 0.1-0.4 m
+    links); near the same joints with wrist 3 a turn on, that turn on (within its +-360 deg)."""
+    control, receive = clients
+    q0 = np.array(receive.getActualQ())
+    assert control.moveJ((q0 + np.radians([5.0, -5.0, 5.0, 5.0, 5.0, 5.0])).tolist(), 1.05, 1.4)
+    q, pose = np.array(receive.getActualQ()), receive.getActualTCPPose()
+    assert np.allclose(control.getInverseKinematics(pose, q.tolist()), q, atol=1e-6)
+    turned = q + np.array([0.0, 0.0, 0.0, 0.0, 0.0, 2.0 * math.pi])
+    if turned[5] > 2.0 * math.pi:
+        turned[5] -= 4.0 * math.pi
+    assert np.allclose(control.getInverseKinematics(pose, turned.tolist()), turned, atol=1e-6)
+    assert control.moveJ(q0.tolist(), 1.05, 1.4)
+
+
+def test_moveJ_IK_moves_the_tcp_to_the_pose(clients) -> None:
+    control, receive = clients
+    start = receive.getActualTCPPose()
+    target = [start[0] + 0.02, start[1] - 0.01, start[2], *start[3:]]
+    assert control.moveJ_IK(target, 1.05, 1.4)
+    reached = receive.getActualTCPPose()
+    assert np.linalg.norm(np.subtract(reached[:3], target[:3])) < 1e-3
+    assert _angle_deg(reached, target) < 0.1
+
+
+def test_a_command_the_twin_does_not_model_fails_as_a_stopped_program() -> None:
+    """zeroFtSensor (force mode's companion, not modelled): ur_rtde sees the program end and
+    returns False, never True for a command that did nothing."""
+    with running_twin("test_unmodelled_command", seconds=30.0) as twin:
+        control = rtde_control.RTDEControlInterface(twin.robot_host)
+        try:
+            assert not control.zeroFtSensor()
+            assert not control.isProgramRunning()
+        finally:
+            control.disconnect()
+        assert "command 8 (zeroFtSensor) of the control script is not modelled" in twin.output()

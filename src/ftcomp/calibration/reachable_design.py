@@ -13,11 +13,20 @@ or has checked :data:`MAX_SAMPLE`). The sample gives the reachable fraction, whi
 The check itself is any ``(p_base_m, R_base_sensor) -> bool``: a robot's own
 (:class:`~ftcomp.hardware.protocols.ChecksReachability`) or a URDF chain's inverse kinematics
 (:class:`ftcomp.ros2.urdf_ik.UrdfIk`).
+
+Each orientation reachable is not yet a visit the arm can make: joint moves between them may
+wind a joint to its end. :func:`plan_visit` checks the whole visit as a robot that moves in
+joint space makes it (:class:`~ftcomp.hardware.protocols.MovesInJointSpace`: each move to the
+inverse kinematics nearest the joints before it, within the joint ranges), from the arm's
+joints now, and orders it to keep the joint travel short: from where the arm is, the next pose
+is the one whose solution is nearest in its largest joint move. A pose without a solution from
+there is left out, with the reason.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
@@ -31,9 +40,12 @@ __all__ = [
     "MAX_SAMPLE",
     "MIN_SAMPLE",
     "POOL_PER_POSE",
+    "NearestIk",
     "ReachCheck",
     "Reachability",
+    "Visit",
     "design_reachable_poses",
+    "plan_visit",
 ]
 
 #: Unreachable choices of the design after which it samples instead.
@@ -47,6 +59,13 @@ MAX_SAMPLE: Final = 200
 
 #: ``(p_base_m (3,), R_base_sensor (3, 3)) -> whether the tip reaches that pose``.
 ReachCheck = Callable[[NDArray[np.float64], NDArray[np.float64]], bool]
+
+
+#: ``(p_base_m (3,), R_base_sensor (3, 3), q_near_rad (N,)) -> joints [rad] (N,) or None``:
+#: the inverse kinematics nearest ``q_near_rad`` within the joint ranges.
+NearestIk = Callable[
+    [NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]], NDArray[np.float64] | None
+]
 
 
 class _BudgetSpentError(Exception):
@@ -165,3 +184,75 @@ def design_reachable_poses(
     except _BudgetSpentError:
         pool = reach.reachable_sample(candidates, count)
         return design_poses(count, pool, theta, keep=keep)
+
+
+@dataclass(frozen=True)
+class Visit:
+    """A visit of poses by joint moves, checked from a start configuration.
+
+    Attributes:
+        order: the poses visited, as indices into the poses given, in visit order.
+        q_rad: the joints at each visited pose [rad], (len(order), N).
+        left_out: ``(index, why)`` of each pose the visit cannot reach.
+        largest_move_rad: the largest single joint move of the visit [rad].
+    """
+
+    order: tuple[int, ...]
+    q_rad: NDArray[np.float64]
+    left_out: tuple[tuple[int, str], ...]
+    largest_move_rad: float
+
+
+def plan_visit(
+    p_base_m: Sequence[NDArray[np.float64]] | NDArray[np.float64],
+    R_base_sensor: NDArray[np.float64],
+    q_start_rad: NDArray[np.float64],
+    ik: NearestIk,
+) -> Visit:
+    """Order poses into a visit by joint moves from ``q_start_rad`` (module docstring).
+
+    Args:
+        p_base_m: each pose's position [m], base frame, (K, 3).
+        R_base_sensor: each pose's orientation, (K, 3, 3).
+        q_start_rad: the arm's joints now [rad], (N,).
+        ik: the inverse kinematics nearest a configuration, within the joint ranges.
+
+    Raises:
+        ParameterError: mismatched shapes.
+    """
+    R = np.asarray(R_base_sensor, dtype=float)
+    p = np.asarray(p_base_m, dtype=float)
+    q = np.asarray(q_start_rad, dtype=float)
+    if R.ndim != 3 or R.shape[1:] != (3, 3) or p.shape != (len(R), 3) or q.ndim != 1:
+        raise ParameterError(
+            f"plan_visit needs K positions (K, 3), K rotations (K, 3, 3) and joints (N,); got "
+            f"{p.shape}, {R.shape}, {q.shape}"
+        )
+    remaining = list(range(len(R)))
+    order: list[int] = []
+    solutions: list[NDArray[np.float64]] = []
+    left_out: list[tuple[int, str]] = []
+    largest = 0.0
+    while remaining:
+        best: tuple[float, int, NDArray[np.float64]] | None = None
+        for i in list(remaining):
+            sol = ik(p[i], R[i], q)
+            if sol is None:
+                continue
+            move = float(np.max(np.abs(sol - q)))
+            if best is None or move < best[0]:
+                best = (move, i, sol)
+        if best is None:  # none reachable from here: each left out
+            joints = np.round(np.degrees(q), 1).tolist()
+            for i in remaining:
+                left_out.append(
+                    (i, f"no inverse kinematics within the joint ranges near {joints} deg")
+                )
+            break
+        move, i, q = best
+        largest = max(largest, move)
+        order.append(i)
+        solutions.append(q)
+        remaining.remove(i)
+    q_all = np.array(solutions) if solutions else np.zeros((0, len(q_start_rad)))
+    return Visit(tuple(order), q_all, tuple(left_out), largest)

@@ -7,7 +7,9 @@ import argparse
 import contextlib
 import csv
 import io
+import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -23,9 +25,14 @@ from ftcomp.calibration.design import (
     predicted_std_errors,
     tilt_from_down_rad,
 )
-from ftcomp.calibration.reachable_design import Reachability, design_reachable_poses
+from ftcomp.calibration.reachable_design import (
+    Reachability,
+    Visit,
+    design_reachable_poses,
+    plan_visit,
+)
 from ftcomp.errors import ParameterError
-from ftcomp.hardware.protocols import ChecksReachability, Robot
+from ftcomp.hardware.protocols import ChecksReachability, MovesInJointSpace, Robot
 from ftcomp.io.atomic import atomic_write_text, check_writable
 from ftcomp.samples import PoseList
 
@@ -165,6 +172,14 @@ def _urdf_reach(args: argparse.Namespace) -> tuple[Reachability, str]:
     return reach, describe
 
 
+def _robot_visit(robot: Robot) -> Callable[..., Visit] | None:
+    """The visit check of a robot that moves in joint space, from its joints now."""
+    if not isinstance(robot, MovesInJointSpace):
+        return None
+    q_start = robot.joint_positions_rad()
+    return lambda p, R: plan_visit(p, R, q_start, robot.inverse_kinematics)
+
+
 def _robot_reach(args: argparse.Namespace, robot: Robot) -> tuple[Reachability, str]:
     """The reach check by the robot's own (its TCP taken as the sensor frame)."""
     if not isinstance(robot, ChecksReachability):
@@ -214,13 +229,16 @@ def run(args: argparse.Namespace) -> int:
     kept = read_pose_file(args.keep) if args.keep else None
     with contextlib.ExitStack() as stack:
         reach: tuple[Reachability, str] | None = None
+        visit = None
         if args.urdf:
             reach = _urdf_reach(args)
         elif args.robot:
             from ftcomp.hardware.registry import open_robot
 
-            reach = _robot_reach(args, stack.enter_context(open_robot(args.robot)))
-        return _design(args, output, kept, reach)
+            robot = stack.enter_context(open_robot(args.robot))
+            reach = _robot_reach(args, robot)
+            visit = _robot_visit(robot)
+        return _design(args, output, kept, reach, visit)
 
 
 def _design(
@@ -228,8 +246,11 @@ def _design(
     output: Path,
     kept: PoseList | None,
     reach_described: tuple[Reachability, str] | None,
+    visit: Callable[..., Visit] | None = None,
 ) -> int:
-    """Design ``args.count`` poses after ``kept``, write them to ``output``, print."""
+    """Design ``args.count`` poses after ``kept``, write them to ``output``, print; with
+    ``visit`` (a robot that moves in joint space), in the order of a visit checked from the
+    arm's joints now, any pose it cannot reach left out with a line."""
     from ftcomp import paper
 
     R_keep = kept.rotations.as_matrix().reshape(-1, 3, 3) if kept is not None else None
@@ -254,6 +275,14 @@ def _design(
         if kept is not None and kept.positions_base_m is not None:
             p_all[:n_keep] = kept.positions_base_m
         p_all = p_all[order]
+    checked = None
+    if visit is not None and p_all is not None:
+        checked = visit(p_all, R_all)
+        for i, why in checked.left_out:
+            print(f"warning: pose {ids[i]} left out: {why}", file=sys.stderr)
+        keep_order = list(checked.order)
+        R_all, p_all = R_all[keep_order], p_all[keep_order]
+        ids = [ids[i] for i in keep_order]
     atomic_write_text(output, _csv(R_all, ids, p_all))
     ours = predicted_std_errors(R_all, theta)
     theirs = predicted_std_errors(paper.paper_poses().rotations.as_matrix(), theta)
@@ -264,6 +293,12 @@ def _design(
     if reach_described is not None and p_all is not None:
         reach, describe = reach_described
         print(reach.summary(describe))
+        if checked is not None:
+            print(
+                f"visit: {len(checked.order)} poses by joint moves from the arm's joints now, "
+                "each to the inverse kinematics nearest the joints before it, every joint within "
+                f"its range (largest joint move {math.degrees(checked.largest_move_rad):.0f} deg)"
+            )
         for pid, R, p in zip(ids, R_all, p_all, strict=True):
             if pid in taken and not reach.reaches(p, R):
                 print(

@@ -207,9 +207,18 @@ def run(args: argparse.Namespace) -> int:
             if event.record is not None:
                 progress.advance()
 
+        def on_skip(line: str) -> None:
+            print(f"warning: {line}", file=sys.stderr, flush=True)
+
         try:
             result = record(
-                robot, sensor, config, mount=mount, on_event=on_event, observers=observers
+                robot,
+                sensor,
+                config,
+                mount=mount,
+                on_event=on_event,
+                observers=observers,
+                on_skip=on_skip,
             )
         finally:
             progress.close()

@@ -74,6 +74,12 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="with a load and a surface: start it this far above [mm] (default 5)",
     )
     parser.add_argument("--tilt-deg", default="0,0", help="base tilt U,V [deg] (default 0,0)")
+    parser.add_argument(
+        "--start-q-deg",
+        default=None,
+        help="start the arm at these joint positions, comma-separated, one per joint [deg] "
+        "(default: the face's start pose)",
+    )
     parser.add_argument("--seed", type=int, default=0, help="sensor noise seed (default 0)")
     parser.add_argument(
         "--gain-error-percent", type=float, default=0.0, help="sensor gain error [%%] (default 0)"
@@ -154,6 +160,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         ("p_flange_sensor_m", "--tcp-offset-mm"),
         ("rotvec_flange_sensor_rad", "--tcp-rotvec-rad"),
         ("tilt_deg", "--tilt-deg"),
+        ("start_q_deg", "--start-q-deg"),
         ("load_kg", "--load-kg"),
         ("clearance_mm", "--clearance-mm"),
         ("gain_error_percent", "--gain-error-percent"),
@@ -177,6 +184,9 @@ def run(args: argparse.Namespace) -> int:
     drift = _floats(args.drift_N_per_min, 3, "--drift-N-per-min")
     offset = _floats(args.tcp_offset_mm, 3, "--tcp-offset-mm")
     rotvec = _floats(args.tcp_rotvec_rad, 3, "--tcp-rotvec-rad")
+    start_q = None
+    if args.start_q_deg is not None:
+        start_q = _floats(args.start_q_deg, len(args.start_q_deg.split(",")), "--start-q-deg")
     surface = args.surface
     arm = face_arm(args.robot) if args.robot in twin_faces("robot") else None
     cell = CellConfig(
@@ -192,6 +202,7 @@ def run(args: argparse.Namespace) -> int:
         drift_N_per_min=(drift[0], drift[1], drift[2]),
         p_flange_sensor_m=(offset[0] * 1e-3, offset[1] * 1e-3, offset[2] * 1e-3),
         rotvec_flange_sensor_rad=(rotvec[0], rotvec[1], rotvec[2]),
+        start_q_deg=start_q,
     )
     config = TwinConfig(
         robot_host=args.robot_host,

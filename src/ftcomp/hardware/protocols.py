@@ -59,6 +59,7 @@ __all__ = [
     "ClockName",
     "CountsLostPackets",
     "Mount",
+    "MovesInJointSpace",
     "NothingToClose",
     "PoseSample",
     "ReportsLateness",
@@ -430,6 +431,36 @@ class ChecksReachability(Protocol):
     ) -> bool:
         """Whether the TCP can be brought to this pose (base frame [m]) within the robot's
         limits."""
+        ...
+
+
+@runtime_checkable
+class MovesInJointSpace(Protocol):
+    """A robot that visits a pose by a joint move to the inverse kinematics nearest its
+    current joints, within its joint ranges (as a pose design's visit check plans it,
+    :func:`ftcomp.calibration.reachable_design.plan_visit`).
+
+    Backends: ``ur://`` (``getInverseKinematics(pose, qnear)`` and ``moveJ``).
+    """
+
+    def joint_positions_rad(self) -> NDArray[np.float64]:
+        """The joints' positions now [rad], (N,)."""
+        ...
+
+    def inverse_kinematics(
+        self,
+        p_base_tcp: NDArray[np.float64],
+        R_base_tcp: NDArray[np.float64],
+        q_near_rad: NDArray[np.float64],
+    ) -> NDArray[np.float64] | None:
+        """The joints [rad] putting the TCP at this base-frame pose nearest ``q_near_rad``
+        within the joint ranges, or None."""
+        ...
+
+    def move_pose_joints(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64], duration_s: float
+    ) -> None:
+        """Blocking joint move to the inverse kinematics nearest the current joints."""
         ...
 
 

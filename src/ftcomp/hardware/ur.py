@@ -78,6 +78,10 @@ _MOVEL_RAD_PER_M = 4.0
 #: at the target; further, and the arm did not get there (a joint limit, a singularity).
 _ARRIVED_M = 1e-3
 _ARRIVED_RAD = math.radians(0.5)
+#: Joint moves (moveJ) at most this fast and with this acceleration, leading joint [rad/s,
+#: rad/s^2]: ur_rtde's and PolyScope's defaults for moveJ.
+_JOINT_SPEED_RAD_S: Final = 1.05
+_JOINT_ACCEL_RAD_S2: Final = 1.4
 
 
 #: RTDE ``safety_status_bits``: protective stopped (bit 2), emergency stopped (bit 7), as
@@ -94,7 +98,8 @@ class URRobot(LatenessOfPacer):
     """A UR arm over RTDE (see the module docstring for the URI and the frames). Capabilities:
     :class:`~ftcomp.hardware.protocols.TakesControl`,
     :class:`~ftcomp.hardware.protocols.ReportsLateness`,
-    :class:`~ftcomp.hardware.protocols.ChecksReachability`.
+    :class:`~ftcomp.hardware.protocols.ChecksReachability`,
+    :class:`~ftcomp.hardware.protocols.MovesInJointSpace`.
 
     Args:
         uri: the parsed URI (for messages).
@@ -298,6 +303,82 @@ class URRobot(LatenessOfPacer):
             control.getInverseKinematicsHasSolution(pose) and control.isPoseWithinSafetyLimits(pose)
         )
 
+    def joint_positions_rad(self) -> NDArray[np.float64]:
+        """The joints' measured positions [rad] (``actual_q``)."""
+        self.check()
+        return np.array(self.receive.getActualQ(), dtype=float)
+
+    def inverse_kinematics(
+        self,
+        p_base_tcp: NDArray[np.float64],
+        R_base_tcp: NDArray[np.float64],
+        q_near_rad: NDArray[np.float64],
+    ) -> NDArray[np.float64] | None:
+        """The controller's inverse kinematics nearest ``q_near_rad`` (ur_rtde's
+        ``getInverseKinematics(pose, qnear)``), or None where it has no solution or the pose is
+        outside the safety limits (asked first: a ``get_inverse_kin`` without a solution ends
+        the control script)."""
+        control = self._control()
+        pose = _pose_list(np.asarray(p_base_tcp, dtype=float), np.asarray(R_base_tcp, dtype=float))
+        near = [float(v) for v in q_near_rad]
+        if not (
+            control.getInverseKinematicsHasSolution(pose, near)
+            and control.isPoseWithinSafetyLimits(pose)
+        ):
+            return None
+        q = np.array(control.getInverseKinematics(pose, near), dtype=float)
+        self.check()  # a program that ended on the way answers nothing worth reading
+        return q
+
+    def move_pose_joints(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64], duration_s: float
+    ) -> None:
+        """Blocking joint move (moveJ) to the inverse kinematics nearest the current joints,
+        the leading joint at a speed that takes about ``duration_s`` (at most 1.05 rad/s).
+
+        Raises:
+            UnreachablePoseError: no inverse kinematics or outside the safety limits (checked
+                before moving).
+            HardwareError: the move failed, ended away from its target, or the connection was
+                lost.
+        """
+        p = np.asarray(p_base_tcp, dtype=float)
+        R = np.asarray(R_base_tcp, dtype=float)
+        q_now = self.joint_positions_rad()
+        q = self.inverse_kinematics(p, R, q_now)
+        if q is None:
+            raise UnreachablePoseError(
+                f"{self.uri.text!r}: pose p={np.round(p, 4).tolist()} m is not reachable "
+                "(no inverse kinematics or outside the safety limits); not moved"
+            )
+        way = float(np.max(np.abs(q - q_now)))
+        speed = min(_JOINT_SPEED_RAD_S, max(way / max(duration_s, 1e-3), 1e-3))
+        self._moving = True
+        ok = self._control().moveJ(q.tolist(), speed, _JOINT_ACCEL_RAD_S2, False)
+        self._moving = False
+        self._check_arrival(ok, "moveJ", p, R)
+
+    def _check_arrival(
+        self, ok: bool, command: str, p: NDArray[np.float64], R: NDArray[np.float64]
+    ) -> None:
+        """Raise unless a blocking move returned True and the TCP is at its target."""
+        self.check()
+        at = self.pose()
+        off_m = float(np.linalg.norm(at.p_base_tcp - p))
+        off_rad = float(Rotation.from_matrix(R @ at.R_base_tcp.T).magnitude())
+        away = f"{off_m * 1e3:.1f} mm and {math.degrees(off_rad):.1f} deg from its target"
+        if not ok:
+            raise HardwareError(
+                f"{self.uri.text!r}: {command} did not complete: the arm stopped {away} (the "
+                "program ended: a joint limit or a singularity on the way, or the pendant; "
+                "the controller's log says which)"
+            )
+        if off_m > _ARRIVED_M or off_rad > _ARRIVED_RAD:
+            raise HardwareError(
+                f"{self.uri.text!r}: {command} ended {away} (a joint limit or a singularity on "
+                "the way?)"
+            )
+
     def move_pose(
         self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64], duration_s: float
     ) -> None:
@@ -326,22 +407,7 @@ class URRobot(LatenessOfPacer):
         self._moving = True
         ok = self._control().moveL(_pose_list(p, R), speed, self.max_accel_m_s2, False)
         self._moving = False
-        self.check()
-        at = self.pose()
-        off_m = float(np.linalg.norm(at.p_base_tcp - p))
-        off_rad = float(Rotation.from_matrix(R @ at.R_base_tcp.T).magnitude())
-        away = f"{off_m * 1e3:.1f} mm and {math.degrees(off_rad):.1f} deg from its target"
-        if not ok:
-            raise HardwareError(
-                f"{self.uri.text!r}: moveL did not complete: the arm stopped {away} (the "
-                "program ended: a joint limit or a singularity on the way, or the pendant; "
-                "the controller's log says which)"
-            )
-        if off_m > _ARRIVED_M or off_rad > _ARRIVED_RAD:
-            raise HardwareError(
-                f"{self.uri.text!r}: moveL ended {away} (a joint limit or a singularity on "
-                "the way?)"
-            )
+        self._check_arrival(ok, "moveL", p, R)
 
     def settle(self, max_duration_s: float) -> float:
         """Wait until every joint is slower than 2 mrad/s for 0.1 s; return the time taken [s].

@@ -287,6 +287,7 @@ def record(
     mount: Mount | None = None,
     on_event: Callable[[PoseEvent], None] | None = None,
     observers: Sequence[LogObserver] = (),
+    on_skip: Callable[[str], None] | None = None,
 ) -> RecordResult:
     """Run a recording session (module docstring) and write its sample file as it goes.
 
@@ -300,6 +301,9 @@ def record(
             announce it.
         observers: see every recorded reading as a row (:data:`OBSERVED_COLUMNS`, once its
             pose is in the file) and the events (each pose, the end), on a worker thread.
+        on_skip: called with a line for each pose of a robot-driven plan left out because the
+            robot cannot reach it (:func:`~ftcomp.session.robot_driven.record_poses`); the
+            session goes on.
 
     Returns:
         The :class:`RecordResult`; on Ctrl-C or a fault after the first pose, with ``ended``
@@ -337,7 +341,9 @@ def record(
     clock = loop_clock(robot, "ftcomp record") if isinstance(plan, HandGuided) else None
     with InterruptHold() as hold:
         try:
-            ended, reason = _run_plan(robot, sensor, plan, mount, driven, recorded, file, clock)
+            ended, reason = _run_plan(
+                robot, sensor, plan, mount, driven, recorded, file, clock, on_skip
+            )
         finally:
             hold.finishing(f"finishing {output}")
             if thread is not None:
@@ -368,6 +374,7 @@ def _run_plan(
     recorded: Callable[[PoseEvent], None],
     file: _SampleFile,
     clock: LoopClock | None,
+    on_skip: Callable[[str], None] | None = None,
 ) -> tuple[Outcome, str]:
     """Record the plan; how it ended and why (see :func:`record`), the robot stopped."""
     ended = Outcome.COMPLETE
@@ -386,6 +393,7 @@ def _run_plan(
                 settle_max_s=plan.settle_max_s,
                 tolerance=plan.tolerance,
                 max_tries=plan.max_tries,
+                on_skip=on_skip,
             )
         else:
             recorder = ManualRecorder(

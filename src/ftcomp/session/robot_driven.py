@@ -3,7 +3,11 @@
 :func:`record_poses` drives the robot through a :class:`~ftcomp.samples.PoseList` with
 :func:`ftcomp.calibration.collect.record_static`, one pose at a time: it checks every pose is
 reachable before the first move (when the robot can tell, see
-:class:`~ftcomp.hardware.protocols.ChecksReachability`), moves, waits for the arm to come to rest,
+:class:`~ftcomp.hardware.protocols.ChecksReachability`) and leaves out, with a line naming it and
+why, each one the robot cannot reach; it moves (a robot that moves in joint space,
+:class:`~ftcomp.hardware.protocols.MovesInJointSpace`, by a joint move to the inverse kinematics
+nearest its joints, as ``poses design --robot`` planned the visit; a pose it finds no solution
+for from there is left out the same way), waits for the arm to come to rest,
 records ``samples_per_pose`` readings and re-records while the readings still drift (the
 wrench has not settled). Each finished pose goes to ``on_pose`` as a
 :class:`~ftcomp.session.pose_record.PoseRecord` at once, so a caller can write it out before
@@ -23,7 +27,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.calibration.collect import record_static
 from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
-from ftcomp.hardware.protocols import ChecksReachability, Mount, Robot, WrenchSensor
+from ftcomp.hardware.protocols import (
+    ChecksReachability,
+    Mount,
+    MovesInJointSpace,
+    Robot,
+    WrenchSensor,
+)
 from ftcomp.samples import PoseList
 from ftcomp.session.pose_record import PoseRecord, WrenchTolerance, is_settled, wrench_drift
 
@@ -32,22 +42,26 @@ __all__ = ["check_reachable", "record_poses"]
 
 def check_reachable(
     robot: Robot, poses: PoseList, mount: Mount, position_base_m: NDArray[np.float64]
-) -> None:
-    """Before any move: raise on the first pose the robot reports unreachable (robots that
-    cannot tell are checked by their own move, before it starts).
+) -> list[str]:
+    """Before any move: the labels of the poses the robot reports unreachable (none for robots
+    that cannot tell: their own move checks, before it starts).
 
     Raises:
-        UnreachablePoseError: naming the pose.
+        UnreachablePoseError: the robot reaches none of them (nothing was moved).
     """
     if not isinstance(robot, ChecksReachability):
-        return
+        return []
+    unreachable = []
     for i, (label, rotation) in enumerate(zip(poses.ids, poses.rotations, strict=True)):
         p = poses.positions_base_m[i] if poses.positions_base_m is not None else position_base_m
         if not robot.is_reachable(*mount.tcp_pose(p, rotation.as_matrix())):
-            raise UnreachablePoseError(
-                f"pose {label} of {poses.source} is not reachable (inverse kinematics or safety "
-                "limits); nothing was moved"
-            )
+            unreachable.append(label)
+    if unreachable and len(unreachable) == len(poses.ids):
+        raise UnreachablePoseError(
+            f"no pose of {poses.source} is reachable (inverse kinematics or safety limits); "
+            "nothing was moved"
+        )
+    return unreachable
 
 
 def record_poses(
@@ -63,6 +77,7 @@ def record_poses(
     settle_max_s: float = 5.0,
     tolerance: WrenchTolerance | None = None,
     max_tries: int = 5,
+    on_skip: Callable[[str], None] | None = None,
 ) -> None:
     """Visit every pose and hand each one's readings to ``on_pose`` as soon as they are in.
 
@@ -80,10 +95,11 @@ def record_poses(
         tolerance: how still the readings must be (see
             :class:`~ftcomp.session.pose_record.WrenchTolerance`).
         max_tries: recordings at one pose before giving up on a drifting wrench.
+        on_skip: called with one line for each pose left out (it names the pose and why).
 
     Raises:
-        UnreachablePoseError: a pose cannot be reached (checked before the first move when
-            the robot can tell).
+        UnreachablePoseError: no pose can be reached (checked before the first move when the
+            robot can tell).
         HardwareError: the wrench keeps drifting at a pose, the sensor goes silent, the
             connection is lost.
     """
@@ -98,8 +114,30 @@ def record_poses(
         p_default = np.asarray(position_base_m, dtype=float)
         if p_default.shape != (3,) or not np.all(np.isfinite(p_default)):
             raise ParameterError(f"position_base_m must be 3 finite numbers [m], got {p_default}")
-    check_reachable(robot, poses, mount, p_default)
+    skipped = set(check_reachable(robot, poses, mount, p_default))
+
+    def skip(line: str) -> None:
+        if on_skip is not None:
+            on_skip(line)
+
+    for label in poses.ids:
+        if label in skipped:
+            skip(
+                f"pose {label} of {poses.source} skipped: the robot does not reach it (inverse "
+                "kinematics or safety limits)"
+            )
     for i, label in enumerate(poses.ids):
+        if label in skipped:
+            continue
+        p_i = poses.positions_base_m[i] if poses.positions_base_m is not None else p_default
+        if isinstance(robot, MovesInJointSpace):
+            try:
+                robot.move_pose_joints(
+                    *mount.tcp_pose(p_i, poses.rotations[i].as_matrix()), move_duration_s
+                )
+            except UnreachablePoseError as exc:
+                skip(f"pose {label} of {poses.source} skipped: {exc}")
+                continue
         one = PoseList(
             (label,),
             poses.rotations[i : i + 1],

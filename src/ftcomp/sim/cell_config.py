@@ -56,6 +56,9 @@ _TOOL_DOWN: Final = np.diag([1.0, -1.0, -1.0])
 #: Durations of the start moves [s]: to the start pose, to 20 mm above the surface (empty),
 #: then down to the clearance (holding the load).
 _START_MOVE_S: Final = 0.5
+#: A joint start (``start_q_deg``) moves there at about this speed [rad/s] (a UR's moveJ
+#: default), at least :data:`_START_MOVE_S`.
+_START_JOINT_SPEED_RAD_S: Final = 1.05
 _LOWER_MOVE_S: Final = 0.3
 #: A load is grasped at least this far above the surface [m] (then lowered to the clearance).
 _GRASP_CLEARANCE_M: Final = 0.02
@@ -93,6 +96,8 @@ class CellConfig:
         realistic_drift: a real sensor's drift (wander and warm-up,
             :meth:`~ftcomp.sim.sensor.SensorSpec.realistic_drift`) times this, in
             [0, :data:`MAX_REALISTIC_DRIFT`]; 0: none.
+        start_q_deg: start the arm at these joint positions [deg], one per joint, within the
+            joint ranges, instead of at the start pose; None: the start pose.
 
     Raises:
         ParameterError: a value out of its range or a combination that cannot be built,
@@ -162,6 +167,8 @@ class CellConfig:
         le=MAX_REALISTIC_DRIFT,
         help="a real sensor's drift (wander and warm-up) times this, 0: none",
     )
+    #: As many values as the arm has joints: checked by ``_check_start_q``, not by a param.
+    start_q_deg: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         gain = self.gain_error_percent
@@ -174,7 +181,29 @@ class CellConfig:
             raise ParameterError("grasp needs a load (load_kg)", field="grasp")
         if self.clearance_mm is not None and (not self.grasp or self.surface == "none"):
             raise ParameterError("clearance_mm needs grasp and a surface", field="clearance_mm")
+        # (arm None: a copy made for a record of the fields, serve_twin's truth file)
+        if self.start_q_deg is not None and self.arm is not None:
+            self._check_start_q(self.start_q_deg)
         self.scene()  # the scene's own checks (the sensor offset needs a DH arm, ...) now
+
+    def _check_start_q(self, q_deg: tuple[float, ...]) -> None:
+        """``start_q_deg``: one finite value per joint, each within its range."""
+        arm = self.arm
+        n = len(arm.joint_names)
+        if len(q_deg) != n or not all(math.isfinite(v) for v in q_deg):
+            raise ParameterError(
+                f"start_q_deg must be {n} finite joint positions [deg] (one per joint), "
+                f"got {q_deg!r}",
+                field="start_q_deg",
+            )
+        lower, upper = np.degrees(arm.joint_lower_rad), np.degrees(arm.joint_upper_rad)
+        for j, v in enumerate(q_deg):
+            if not lower[j] <= v <= upper[j]:
+                raise ParameterError(
+                    f"start_q_deg: joint {j + 1} at {v:g} deg is outside its range "
+                    f"[{lower[j]:g}, {upper[j]:g}] deg",
+                    field="start_q_deg",
+                )
 
     @property
     def sensor_offset(self) -> bool:
@@ -211,15 +240,20 @@ class CellConfig:
         )
 
     def open_cell(self) -> SimCell:
-        """A fresh cell as described, ready at its start: the sensor at the start pose (with an
-        offset sensor), the load grasped if asked, held ``clearance_mm`` above the surface if
-        given (grasped 20 mm up, empty on the way, then lowered).
+        """A fresh cell as described, ready at its start: the arm at ``start_q_deg`` if given,
+        else the sensor at the start pose (with an offset sensor), the load grasped if asked,
+        held ``clearance_mm`` above the surface if given (grasped 20 mm up, empty on the way,
+        then lowered).
 
         Raises:
             UnreachablePoseError: the arm cannot reach the start pose or the surface.
         """
         cell = SimCell(self.scene(), self.sensor_spec(), seed=self.seed)
-        if self.sensor_offset:
+        if self.start_q_deg is not None:
+            q = np.radians(self.start_q_deg)
+            way = float(np.max(np.abs(q - cell.q_command_rad)))
+            cell.move_joints(q, max(_START_MOVE_S, way / _START_JOINT_SPEED_RAD_S))
+        elif self.sensor_offset:
             # The sensor (the TCP) at the start pose whatever the offset: tool down in front.
             cell.move_pose(COLLECTION_POSITION_BASE_M, _TOOL_DOWN, _START_MOVE_S)
         if not self.grasp:

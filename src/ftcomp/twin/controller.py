@@ -10,13 +10,20 @@ program's main loop, every controller cycle:
 - *real-time* commands (``speedL`` 10, ``servoJ`` 11, ``servoL`` 24, ...) are taken and the
   program signals ready (``output_int_register_0 = 1``) in the same cycle;
 - command 0 means idle: ready (1);
-- any other command runs once (the program blocks in it: ``moveL`` 3 until the arm arrived,
-  the stops 15, 16, 33, 34 until it stands), then the program writes done
-  (``output_int_register_0 = 2``) and waits for the client to clear the command to 0; a
-  ``moveL`` the arm cannot complete (a joint held at its limit) ends the program instead, as
-  a UR controller does, and ur_rtde's ``moveL`` returns False;
+- any other command runs once (the program blocks in it: ``moveJ`` 1, ``moveJ_IK`` 2,
+  ``moveL`` 3 and ``moveL_FK`` 4 until the arm arrived, the stops 15, 16, 33, 34 until it
+  stands), then the program writes done (``output_int_register_0 = 2``) and waits for the
+  client to clear the command to 0; a move the arm cannot complete (a joint held at its
+  limit), a ``moveJ`` target outside the joint ranges and an inverse kinematics without a
+  solution end the program instead, as a URScript runtime error does on a UR controller,
+  and ur_rtde's call returns False;
 - answers go to ``output_int_register_1`` (yes/no of 36, 60, 61) and
-  ``output_double_register_0..5`` (joint positions of 30); 255 ends the program.
+  ``output_double_register_0..5`` (joint positions of 30 and 46, the pose of 43, 44, the
+  TCP offset of 40); 255 ends the program.
+
+Every command of ur_rtde 1.6's script (its ``process_cmd``) that this twin does not model
+ends the program with a line on stderr naming it: a client sees the failure a controller
+gives for a script that stopped, never a success for a command that did nothing.
 
 :class:`UrController` runs that loop on registers set by the RTDE clients, and turns the
 commands into the motion of the simulated cell: a reference TCP pose that moves with UR's
@@ -24,11 +31,22 @@ profiles (``moveL``: trapezoidal in the path at speed ``v`` and acceleration ``a
 turning at most 4 rad/s per m/s; ``speedL``: the TCP twist ramped at ``a``; ``servoL``: toward
 the streamed target within the command's time ``t``; ``stopL``: decelerating at ``a``), which
 the cell's joints follow by differential inverse kinematics with a feedback on the commanded
-joints' forward kinematics, so the arm lands where the profile ends.
+joints' forward kinematics, so the arm lands where the profile ends. Joint moves (``moveJ``,
+``speedJ``) run a reference in joint space (``moveJ``: trapezoidal, the joint with the
+longest way at ``v`` and ``a``, the others scaled to arrive with it, as ``movej`` does),
+turned into the TCP twist that moves the commanded joints along it (the Jacobian at the
+commanded joints, with a feedback on the joint error).
+
+Inverse kinematics (``getInverseKinematics``, ``moveJ_IK``, the has-solution checks): the
+configuration within the joint ranges nearest ``qnear`` (the commanded joints when none is
+given), found by damped least squares from ``qnear`` first, then from the arm's home and a
+fixed set of starts, each joint then turned by whole turns to the value nearest ``qnear``
+within its range. UR's own solver is analytic and picks among its eight branches; this one
+finds the branch nearest ``qnear`` in practice, not by construction.
 
 Not modelled: ``servoL``'s ``lookahead_time`` and ``gain`` (the target is reached within ``t``),
-``movej`` and force mode (a command the twin does not know is signalled done at once and
-named on stderr), the RTDE watchdog.
+force mode, freedrive, jogging, contact detection, path moves (each ends the program, see
+above), the RTDE watchdog (``setWatchdog`` is accepted and not enforced).
 """
 
 from __future__ import annotations
@@ -47,6 +65,7 @@ from numpy.typing import NDArray
 from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
 from ftcomp.sim.arm import ARM_JOINT_NAMES
 from ftcomp.sim.cell import SimCell
+from ftcomp.sim.ik import solve_pose
 from ftcomp.sim.scene import NAMES
 
 __all__ = [
@@ -76,9 +95,102 @@ _ARRIVED_RAD: Final = 2e-4
 _ARRIVE_TIMEOUT_S: Final = 0.5
 _HELD_M: Final = 1e-3
 _HELD_RAD: Final = math.radians(0.5)
+#: moveJ is done once every commanded joint is this close to its target [rad] (or within
+#: ``_HELD_JOINT_RAD`` after :data:`_ARRIVE_TIMEOUT_S`); joint moves' feedback gain [1/s].
+_ARRIVED_JOINT_RAD: Final = 1e-4
+_HELD_JOINT_RAD: Final = math.radians(0.5)
+_JOINT_GAIN_PER_S: Final = 40.0
+#: Starts of the inverse kinematics after ``qnear`` and the home configuration: drawn once,
+#: uniform within the joint ranges (a fixed seed: the same pose and ``qnear`` give the same
+#: answer in every twin).
+_IK_STARTS: Final = 24
+_IK_SEED: Final = 34
 _REALTIME: Final = frozenset({6, 9, 10, 11, 24, 25, 26, 27, 38, 58, 66, 67, 68, 69, 70, 71})
 _STOP_COMMANDS: Final = frozenset({15, 16, 33, 34})
 _IDLE, _READY, _DONE = 0, 1, 2
+#: ur_rtde 1.6's script commands by number, for the line naming one the twin does not model.
+_COMMAND_NAMES: Final = {
+    5: "forceMode",
+    6: "forceMode (update)",
+    7: "forceModeStop",
+    8: "zeroFtSensor",
+    11: "servoJ",
+    12: "servoC",
+    18: "teachMode",
+    19: "endTeachMode",
+    20: "forceModeSetDamping",
+    21: "forceModeSetGainScaling",
+    25: "toolContact",
+    26: "getStepTime",
+    27: "getActualJointPositionsHistory",
+    28: "getTargetWaypoint",
+    29: "setTcp",
+    32: "isJointsWithinSafetyLimits",
+    37: "getJointTorques",
+    39: "poseTrans",
+    41: "jogStart",
+    42: "jogStop",
+    45: "movePath",
+    47: "isSteady",
+    51: "moveUntilContact",
+    52: "freedriveMode",
+    53: "endFreedriveMode",
+    54: "getFreedriveStatus",
+    56: "ftRtdeInputEnable",
+    57: "enableExternalFtSensor",
+    58: "getActualToolFlangePose",
+    59: "setGravity",
+    62: "startContactDetection",
+    63: "stopContactDetection",
+    64: "readContactDetection",
+    65: "setTargetPayload",
+}
+
+
+def _trapezoid(
+    t: float, length: float, a: float, v: float, t_acc: float, total: float
+) -> tuple[float, float]:
+    """Where a trapezoidal profile over ``length`` is at time ``t``: ``(s, ds/dt)``, ``s`` the
+    fraction of the way (0 to 1)."""
+    if length <= 0.0 or t >= total:
+        return 1.0, 0.0
+    if t < t_acc:
+        return 0.5 * a * t * t / length, a * t / length
+    if t > total - t_acc:
+        r = total - t
+        return 1.0 - 0.5 * a * r * r / length, a * r / length
+    return (0.5 * a * t_acc * t_acc + v * (t - t_acc)) / length, v / length
+
+
+def _profile(length: float, v: float, a: float) -> tuple[float, float, float]:
+    """``(v, t_acc, total)`` of a trapezoid over ``length`` at speed ``v`` and acceleration
+    ``a`` (a triangle, never reaching ``v``, when the way is short)."""
+    t_acc = v / a
+    if a * t_acc * t_acc >= length:
+        t_acc = math.sqrt(length / a)
+        v = a * t_acc
+    total = 2.0 * t_acc + (length - a * t_acc * t_acc) / v if length > 0 else 0.0
+    return v, t_acc, total
+
+
+@dataclass
+class _JointMove:
+    """A moveJ in progress: start and displacement of the joints [rad], and the profile of the
+    joint with the longest way."""
+
+    q0: NDArray[np.float64]
+    dq: NDArray[np.float64]
+    length: float
+    a: float
+    v: float
+    t_acc: float
+    total: float
+    t: float = 0.0
+    arrived_t: float = 0.0
+
+    @property
+    def target(self) -> NDArray[np.float64]:
+        return self.q0 + self.dq
 
 
 @dataclass
@@ -168,7 +280,17 @@ class UrController:
         self.offset_float = 0
         self.safety = SafetyState()
         self.payload_kg = 0.0
+        #: The payload's centre of gravity, flange frame [m] (``set_payload``'s ``cog``).
+        self.payload_cog_m = np.zeros(3)
         self._fk = mujoco.MjData(cell.model)
+        self._ik_data = mujoco.MjData(cell.model)
+        self._n = cell.n_joints
+        lower, upper = cell.joint_range_rad
+        self._lower, self._upper = lower, upper
+        draws = np.random.default_rng(_IK_SEED).random((_IK_STARTS, self._n))
+        self._ik_starts = [np.array(cell.config.arm.home_q_rad), *(lower + (upper - lower) * draws)]
+        self._jacp = np.zeros((3, cell.model.nv))
+        self._jacr = np.zeros((3, cell.model.nv))
         self._site = cell.model.site(NAMES["ft_site"]).id
         self._R_base_world = cell.R_world_base.T
         p, R = self.commanded_pose()
@@ -178,6 +300,10 @@ class UrController:
         self.executing = False
         self.blocking: str | None = None
         self.move: _Move | None = None
+        self.joint_move: _JointMove | None = None
+        self.q_ref = cell.q_command_rad
+        self.qd_ref = np.zeros(self._n)
+        self.speedj_target = np.zeros(self._n)
         self.speed_target = np.zeros(6)
         self.speed_acc = 0.5
         self.stop_dec = 10.0
@@ -253,53 +379,213 @@ class UrController:
 
     def _enter_hold(self) -> None:
         self.mode = "hold"
+        self.joint_move = None
         self.v_ref = np.zeros(6)
         self.servo_target = None
         self.speed_target = np.zeros(6)
 
     # ---------------------------------------------------------------- commands
+    def _q_in(self, i: int) -> NDArray[np.float64]:
+        return np.array([self._in_float(i + k) for k in range(self._n)])
+
+    def _out_pose(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> None:
+        for k, value in enumerate([*p.tolist(), *rotvec_from_matrix(R)]):
+            self._out_float(k, float(value))
+
+    def _fail(self, why: str) -> None:
+        """A URScript runtime error: the program ends, the arm holds where it is."""
+        print(f"twin: {why}: the program stops, as a UR controller's does", file=sys.stderr)
+        self.script_running = False
+        self.blocking = None
+        self._enter_hold()
+
     def _process(self, cmd: int) -> None:
-        if cmd == 3:  # moveL
-            p1, R1 = self._pose_in(0)
+        if cmd == 1:  # moveJ
+            self._start_joint_move(self._q_in(0), "moveJ")
+        elif cmd == 2:  # moveJ_IK
+            q = self.inverse_kinematics(*self._pose_in(0), self.cell.q_command_rad)
+            if q is None:
+                self._fail("moveJ_IK: the pose has no inverse kinematics within the joint ranges")
+                return
+            self._start_joint_move(q, "moveJ_IK")
+        elif cmd in (3, 4):  # moveL, moveL_FK
+            p1, R1 = self._pose_in(0) if cmd == 3 else self.forward_kinematics(self._q_in(0))
             v, a, asynchronous = self._in_float(6), self._in_float(7), self._in_int(1)
             self._start_move(p1, R1, max(v, 1e-4), max(a, 1e-4))
             if asynchronous != 1:
                 self.blocking = "move"
+        elif cmd == 9:  # speedJ
+            self.speedj_target = self._q_in(0)
+            self.speed_acc = max(self._in_float(6), 1e-4)
+            if self.mode != "speedj":
+                self.q_ref, self.qd_ref = self.cell.q_command_rad, np.zeros(self._n)
+            self.mode = "speedj"
         elif cmd == 10:  # speedL
             self.speed_target = np.array([self._in_float(k) for k in range(6)])
             self.speed_acc = max(self._in_float(6), 1e-4)
+            self._leave_joint_mode()
             self.mode = "speed"
         elif cmd == 24:  # servoL
             self.servo_target = self._pose_in(0)
             self.servo_time = max(self._in_float(8), self.dt)
+            self._leave_joint_mode()
             self.mode = "servo"
         elif cmd in _STOP_COMMANDS:
             self.stop_dec = max(self._in_float(0), 1e-4)
+            self._leave_joint_mode()
             self.mode = "stopping"
             self.servo_target = None
             self.blocking = "stop"
-        elif cmd in (36, 60, 61):  # pose within safety limits / IK has a solution
-            p, R = self._pose_in(0)
-            self._out_int(1, int(self.cell.is_reachable(p, R)))
-        elif cmd == 30:  # inverse kinematics
-            p, R = self._pose_in(0)
-            try:
-                q = self.cell.solve_ik(p, R)
-            except Exception:  # an unreachable pose: the controller faults the program
-                q = self.cell.q_rad
-            for k in range(6):
+        elif cmd == 36:  # pose within the safety limits: here, the joint ranges reach it
+            self._out_int(1, int(self.inverse_kinematics(*self._pose_in(0), None) is not None))
+        elif cmd in (60, 61):  # the inverse kinematics has a solution (61: near qnear)
+            qnear = self._q_in(6) if cmd == 61 else None
+            self._out_int(1, int(self.inverse_kinematics(*self._pose_in(0), qnear) is not None))
+        elif cmd in (30, 46):  # inverse kinematics (30: near qnear; 46: near the joints)
+            qnear = self._q_in(6) if cmd == 30 else None
+            q = self.inverse_kinematics(*self._pose_in(0), qnear)
+            if q is None:
+                self._fail("get_inverse_kin: no solution within the joint ranges")
+                return
+            for k in range(self._n):
                 self._out_float(k, float(q[k]))
-        elif cmd == 17:  # set_payload
+        elif cmd == 43:  # forward kinematics of the commanded joints
+            self._out_pose(*self.forward_kinematics(self.cell.q_command_rad))
+        elif cmd == 44:  # forward kinematics of given joints with a given TCP offset
+            p, R = self.forward_kinematics(self._q_in(0))
+            p_ft, R_ft = self._tcp_offset()
+            p_tcp, R_tcp = self._q_in(6)[:3], matrix_from_rotvec(self._q_in(6)[3:])
+            R_flange = R @ R_ft.T  # the flange: the twin's TCP less its offset
+            p_flange = p - R_flange @ p_ft
+            self._out_pose(p_flange + R_flange @ p_tcp, R_flange @ R_tcp)
+        elif cmd == 40:  # the TCP offset: the sensor's place on the flange
+            self._out_pose(*self._tcp_offset())
+        elif cmd == 17:  # set_payload (a zero cog keeps the one set before, as on PolyScope 5)
             self.payload_kg = self._in_float(0)
+            cog = np.array([self._in_float(k) for k in (1, 2, 3)])
+            if cog.any():
+                self.payload_cog_m = cog
         elif cmd == 31:
             self.safety = SafetyState(True, "protective_stop() from the program")
             self.script_running = False
             self._enter_hold()
         elif cmd == 255:
             self.script_running = False
-        elif cmd not in (35, 9) and cmd not in self.unknown:
-            self.unknown.add(cmd)
-            print(f"twin: command {cmd} of the control script is not modelled", file=sys.stderr)
+        elif cmd == 35:  # set_watchdog: accepted, not enforced (the module docstring)
+            pass
+        else:
+            name = _COMMAND_NAMES.get(cmd, "a command ur_rtde 1.6 does not have")
+            self._fail(f"command {cmd} ({name}) of the control script is not modelled")
+
+    # ---------------------------------------------------------------- kinematics
+    def _tcp_offset(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The TCP (the sensor frame) in the flange frame: position [m], rotation."""
+        config = self.cell.config
+        return (
+            np.array(config.p_flange_sensor_m, dtype=float),
+            matrix_from_rotvec(config.rotvec_flange_sensor_rad),
+        )
+
+    def forward_kinematics(
+        self, q: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The TCP pose of joints ``q`` [rad], base frame (``p`` [m], ``R``)."""
+        d = self._ik_data
+        d.qpos[: self._n] = q
+        mujoco.mj_kinematics(self.cell.model, d)
+        Rbw = self._R_base_world
+        return Rbw @ d.site_xpos[self._site], Rbw @ d.site_xmat[self._site].reshape(3, 3)
+
+    def inverse_kinematics(
+        self,
+        p_base_tcp: NDArray[np.float64],
+        R_base_tcp: NDArray[np.float64],
+        qnear: NDArray[np.float64] | None,
+    ) -> NDArray[np.float64] | None:
+        """The joints [rad] within the ranges putting the TCP at this base-frame pose nearest
+        ``qnear`` (the commanded joints when None), or None (module docstring)."""
+        near = self.cell.q_command_rad if qnear is None else np.asarray(qnear, dtype=float)
+        if near.shape != (self._n,) or not np.isfinite(near).all():
+            return None
+        Rwb = self._R_base_world.T
+        q = solve_pose(
+            self.cell.model,
+            self._ik_data,
+            self._site,
+            np.arange(self._n, dtype=np.intp),
+            np.arange(self._n, dtype=np.intp),
+            Rwb @ p_base_tcp,
+            Rwb @ R_base_tcp,
+            [np.clip(near, self._lower, self._upper), *self._ik_starts],
+            self._lower,
+            self._upper,
+        )
+        if q is None:
+            return None
+        # Each joint by whole turns to the value nearest qnear within its range.
+        turn = 2.0 * math.pi
+        nearest = q + turn * np.round((near - q) / turn)
+        for shift in (0.0, turn, -turn):
+            nearest = np.where(
+                (nearest < self._lower) | (nearest > self._upper), nearest + shift, nearest
+            )
+        return np.where((nearest >= self._lower) & (nearest <= self._upper), nearest, q)
+
+    def _joint_twist(self, qd: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The TCP twist (base frame) that joint velocities ``qd`` give at the commanded joints
+        (:meth:`commanded_pose` has set them)."""
+        mujoco.mj_comPos(self.cell.model, self._fk)
+        mujoco.mj_jacSite(self.cell.model, self._fk, self._jacp, self._jacr, self._site)
+        n, Rbw = self._n, self._R_base_world
+        return np.concatenate([Rbw @ (self._jacp[:, :n] @ qd), Rbw @ (self._jacr[:, :n] @ qd)])
+
+    def _start_joint_move(self, q1: NDArray[np.float64], name: str) -> None:
+        outside = np.flatnonzero((q1 < self._lower) | (q1 > self._upper) | ~np.isfinite(q1))
+        if outside.size:
+            j = int(outside[0])
+            self._fail(
+                f"{name}: joint {ARM_JOINT_NAMES[j]} target {math.degrees(q1[j]):.1f} deg is "
+                f"outside its range [{math.degrees(self._lower[j]):.0f}, "
+                f"{math.degrees(self._upper[j]):.0f}] deg"
+            )
+            return
+        v, a, asynchronous = self._in_float(6), self._in_float(7), self._in_int(1)
+        q0 = self.cell.q_command_rad
+        dq = q1 - q0
+        length = float(np.max(np.abs(dq)))
+        v, t_acc, total = _profile(length, max(v, 1e-4), max(a, 1e-4))
+        self.joint_move = _JointMove(q0, dq, length, max(a, 1e-4), v, t_acc, total)
+        self.q_ref, self.qd_ref = q0, np.zeros(self._n)
+        self.mode = "jmove"
+        if asynchronous != 1:
+            self.blocking = "jmove"
+
+    def _leave_joint_mode(self) -> None:
+        """A Cartesian command after a joint move: its reference starts where the arm is."""
+        if self.mode in ("jmove", "speedj"):
+            self.joint_move = None
+            self.p_ref, self.R_ref = self.commanded_pose()
+            self.v_ref = self._joint_twist(self.qd_ref)
+            self.mode = "hold"
+
+    def _joint_arrival(self, m: _JointMove) -> str:
+        """``"moving"``, ``"arrived"`` or ``"held"`` (as :meth:`_arrival`, in joint space)."""
+        if m.t < m.total:
+            return "moving"
+        m.arrived_t += self.dt
+        off = float(np.max(np.abs(self.cell.q_command_rad - m.target)))
+        if off < _ARRIVED_JOINT_RAD:
+            return "arrived"
+        if m.arrived_t < _ARRIVE_TIMEOUT_S:
+            return "moving"
+        if off < _HELD_JOINT_RAD:
+            return "arrived"
+        print(
+            f"twin: moveJ ended {math.degrees(off):.1f} deg from its target (the arm could not "
+            "follow): the program stops, as a UR controller's does on a move it cannot complete",
+            file=sys.stderr,
+        )
+        return "held"
 
     def _start_move(
         self, p1: NDArray[np.float64], R1: NDArray[np.float64], v: float, a: float
@@ -308,26 +594,13 @@ class UrController:
         dp = p1 - p0
         w = _skew_free_error(R1, R0)
         length = max(float(np.linalg.norm(dp)), float(np.linalg.norm(w)) / _RAD_PER_M)
-        t_acc = v / a
-        if a * t_acc * t_acc >= length:  # a triangle: never reaches v
-            t_acc = math.sqrt(length / a)
-            v = a * t_acc
-        total = 2.0 * t_acc + (length - a * t_acc * t_acc) / v if length > 0 else 0.0
+        v, t_acc, total = _profile(length, v, a)
         self.move = _Move(p0, R0, dp, w, length, a, v, t_acc, total)
         self.mode = "move"
 
     def _move_ref(self, m: _Move) -> None:
         m.t += self.dt
-        t, L, a, v, t_acc, T = m.t, m.length, m.a, m.v, m.t_acc, m.total
-        if L <= 0.0 or t >= T:
-            s, ds = 1.0, 0.0
-        elif t < t_acc:
-            s, ds = 0.5 * a * t * t / L, a * t / L
-        elif t > T - t_acc:
-            r = T - t
-            s, ds = 1.0 - 0.5 * a * r * r / L, a * r / L
-        else:
-            s, ds = (0.5 * a * t_acc * t_acc + v * (t - t_acc)) / L, v / L
+        s, ds = _trapezoid(m.t, m.length, m.a, m.v, m.t_acc, m.total)
         self.p_ref = m.p0 + s * m.dp
         self.R_ref = matrix_from_rotvec(s * m.w) @ m.R0
         self.v_ref = np.concatenate([ds * m.dp, ds * m.w])
@@ -381,8 +654,38 @@ class UrController:
             if self.blocking is None and self.script_running:
                 self._out_int(0, _DONE)
 
+    def _joint_reference_cycle(self) -> None:
+        """moveJ's and speedJ's reference, in joint space."""
+        dt = self.dt
+        if self.mode == "speedj":
+            step = np.clip(
+                self.speedj_target - self.qd_ref, -self.speed_acc * dt, self.speed_acc * dt
+            )
+            self.qd_ref = self.qd_ref + step
+            self.q_ref = np.clip(self.q_ref + self.qd_ref * dt, self._lower, self._upper)
+            return
+        m = self.joint_move
+        if m is None:
+            return
+        m.t += dt
+        s, ds = _trapezoid(m.t, m.length, m.a, m.v, m.t_acc, m.total)
+        self.q_ref, self.qd_ref = m.q0 + s * m.dq, ds * m.dq
+        if self.blocking != "jmove":
+            return
+        arrival = self._joint_arrival(m)
+        if arrival == "arrived":
+            self.blocking = None
+            self._out_int(0, _DONE)
+        elif arrival == "held":  # the program ends and the arm holds where it is
+            self.script_running = False
+            self.blocking = None
+            self._enter_hold()
+
     def _reference_cycle(self) -> None:
         dt = self.dt
+        if self.mode in ("jmove", "speedj"):
+            self._joint_reference_cycle()
+            return
         if self.mode == "move" and self.move is not None:
             self._move_ref(self.move)
             if self.blocking == "move":
@@ -460,6 +763,10 @@ class UrController:
                 self._enter_hold()
             self._reference_cycle()
             p, R = self.commanded_pose()
+            if self.mode in ("jmove", "speedj"):
+                self.p_ref, self.R_ref = p, R
+                error = self.q_ref - self.cell.q_command_rad
+                return self._joint_twist(self.qd_ref + _JOINT_GAIN_PER_S * error)
             if self.mode == "hold" and not self.script_running:
                 self.p_ref, self.R_ref = p, R  # a stopped arm holds where it is
                 return np.zeros(6)

@@ -9,10 +9,12 @@ every RTDE client.
 
 What is faithful: the wire protocols (RTDE v2 with its real types, the dashboard's answers,
 the script's register protocol as ``ur_rtde`` 1.6 uses it); the 500 Hz stream;
-moveL/speedL/servoL/stops as profiles; the arm, a UR5e from UR's published DH table and link
+moveJ/moveJ_IK/moveL/speedJ/speedL/servoL/stops as profiles, the inverse kinematics nearest
+``qnear`` (:mod:`ftcomp.twin.controller`); the arm, a UR5e from UR's published DH table and link
 masses (:func:`ftcomp.sim.arm.ur5e_arm`), its TCP the wrist sensor's frame where the cell's
-flange offset puts it. What is not: the joint servos (stiff PD loops, not UR's), joint-space
-moves, force mode and the watchdog; ``actual_TCP_force`` and ``ft_raw_wrench`` are the wrist
+flange offset puts it. What is not: the joint servos (stiff PD loops, not UR's), force
+mode and the watchdog (a command the twin does not model ends the program, as a URScript error
+does); ``actual_TCP_force`` and ``ft_raw_wrench`` are the wrist
 sensor's readings (the same physics, not a second sensor).
 
 Faults (declared in :mod:`ftcomp.hardware.devices`): ``rtde-stop`` and ``network-loss`` (no
