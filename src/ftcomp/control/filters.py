@@ -22,7 +22,6 @@ from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import signal
 
 from ftcomp.errors import ParameterError
 
@@ -95,6 +94,10 @@ class LowPassFilter:
             raise ParameterError(f"order must be an integer in 1..8, got {self.order!r}")
         if not (isinstance(self.channels, int) and self.channels >= 1):
             raise ParameterError(f"channels must be a positive integer, got {self.channels!r}")
+        # scipy.signal is loaded here, when a filter is designed (off the cycle): importing it
+        # takes most of a second, which every command that only builds its options paid.
+        from scipy import signal
+
         sos = np.asarray(
             signal.butter(
                 self.order, self.cutoff_hz, btype="low", output="sos", fs=1 / self.period_s

@@ -16,16 +16,61 @@ and ``sim place`` do, each one function taking a typed config and returning a re
 
 Sessions take entered devices (``with ftcomp.open_robot(uri) as robot: ...``); on any exit the
 loop stops the robot first.
+
+Names are imported when first used (PEP 562): a command that needs one session's config (to
+build its options) does not load every session's dependencies.
 """
 
-from ftcomp.session.compensate_file import CompensateConfig, CompensateResult, compensate_file
-from ftcomp.session.compliant import CompliantStep, CycleRecord, SettleRule, Settling
-from ftcomp.session.hand_guided import ManualRecorder, StillCriteria
-from ftcomp.session.placement import PlacementConfig, PlacementResult, run_placement
-from ftcomp.session.pose_record import PoseEvent, PoseRecord, WrenchTolerance
-from ftcomp.session.record import HandGuided, RecordConfig, RecordResult, RobotDriven, record
-from ftcomp.session.run import AdmittanceConfig, RunConfig, RunResult, run_compliant
-from ftcomp.session.stream import StreamConfig, StreamProgress, StreamResult, stream
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ftcomp.session.compensate_file import (
+        CompensateConfig,
+        CompensateResult,
+        compensate_file,
+    )
+    from ftcomp.session.compliant import (
+        CompliantStep,
+        CycleRecord,
+        SettleRule,
+        Settling,
+    )
+    from ftcomp.session.hand_guided import (
+        ManualRecorder,
+        StillCriteria,
+    )
+    from ftcomp.session.placement import (
+        PlacementConfig,
+        PlacementResult,
+        run_placement,
+    )
+    from ftcomp.session.pose_record import (
+        PoseEvent,
+        PoseRecord,
+        WrenchTolerance,
+    )
+    from ftcomp.session.record import (
+        HandGuided,
+        RecordConfig,
+        RecordResult,
+        RobotDriven,
+        record,
+    )
+    from ftcomp.session.run import (
+        AdmittanceConfig,
+        RunConfig,
+        RunResult,
+        run_compliant,
+    )
+    from ftcomp.session.stream import (
+        StreamConfig,
+        StreamProgress,
+        StreamResult,
+        stream,
+    )
 
 __all__ = [
     "AdmittanceConfig",
@@ -57,3 +102,40 @@ __all__ = [
     "run_placement",
     "stream",
 ]
+
+_WHERE = {
+    "AdmittanceConfig": "ftcomp.session.run",
+    "CompensateConfig": "ftcomp.session.compensate_file",
+    "CompensateResult": "ftcomp.session.compensate_file",
+    "CompliantStep": "ftcomp.session.compliant",
+    "CycleRecord": "ftcomp.session.compliant",
+    "HandGuided": "ftcomp.session.record",
+    "ManualRecorder": "ftcomp.session.hand_guided",
+    "PlacementConfig": "ftcomp.session.placement",
+    "PlacementResult": "ftcomp.session.placement",
+    "PoseEvent": "ftcomp.session.pose_record",
+    "PoseRecord": "ftcomp.session.pose_record",
+    "RecordConfig": "ftcomp.session.record",
+    "RecordResult": "ftcomp.session.record",
+    "RobotDriven": "ftcomp.session.record",
+    "RunConfig": "ftcomp.session.run",
+    "RunResult": "ftcomp.session.run",
+    "SettleRule": "ftcomp.session.compliant",
+    "Settling": "ftcomp.session.compliant",
+    "StillCriteria": "ftcomp.session.hand_guided",
+    "StreamConfig": "ftcomp.session.stream",
+    "StreamProgress": "ftcomp.session.stream",
+    "StreamResult": "ftcomp.session.stream",
+    "WrenchTolerance": "ftcomp.session.pose_record",
+    "compensate_file": "ftcomp.session.compensate_file",
+    "record": "ftcomp.session.record",
+    "run_compliant": "ftcomp.session.run",
+    "run_placement": "ftcomp.session.placement",
+    "stream": "ftcomp.session.stream",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _WHERE:
+        raise AttributeError(f"module 'ftcomp.session' has no attribute {name!r}")
+    return getattr(importlib.import_module(_WHERE[name]), name)
