@@ -1,11 +1,13 @@
 """ROS 2 nodes for the live tests, each in its own process, written with rclpy alone.
 
-``python rclpy_peer.py publish SECONDS [FRAME] [--description]``: node ``sensor_driver``
+``python rclpy_peer.py publish SECONDS [FRAME] [--description] [--still] [--nan]``: node
+``sensor_driver``
 publishing ``/ft_raw`` (WrenchStamped, reliable, 200 Hz; reading k is
 ``MODEL.predict(R_BASE_SENSOR) + contact(k)`` stamped ``EPOCH_NS + k * 5 ms`` in FRAME, default
 ``ft_sensor``) and ``/joint_states`` (JointState, 100 Hz, :data:`Q` on the two joints of
 :data:`URDF`); with ``--description``, also ``/robot_description`` latched (transient local),
-as robot_state_publisher does.
+as robot_state_publisher does; with ``--still``, the tool at rest with the bias moved by
+:data:`SHIFT` instead of a contact; with ``--nan``, every odd reading's fz is NaN.
 
 ``python rclpy_peer.py subscribe TOPIC COUNT SECONDS OUT.json``: node ``listener`` collecting
 WrenchStamped on TOPIC until COUNT messages or SECONDS passed; writes
@@ -76,6 +78,10 @@ R_BASE_SENSOR = (
 )
 
 
+#: With ``--still``, every reading is the tool at rest with the bias moved by this [N, N*m].
+SHIFT = np.array([0.3, -0.2, 0.5, 0.01, 0.02, -0.03])
+
+
 def contact(k: int) -> np.ndarray:
     """The contact wrench of reading k [N, N*m]: what compensation must give back."""
     return np.array([0.5, -1.0, 2.0, 0.01, -0.02, 0.03]) + 0.001 * k
@@ -85,7 +91,7 @@ def _stamp(msg_stamp: object, t_ns: int) -> None:
     msg_stamp.sec, msg_stamp.nanosec = divmod(t_ns, 10**9)  # type: ignore[attr-defined]
 
 
-def publish(seconds: float, frame: str, description: bool) -> None:
+def publish(seconds: float, frame: str, description: bool, still: bool, nan: bool) -> None:
     node = Node("sensor_driver")
     reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
     wrenches = node.create_publisher(WrenchStamped, "/ft_raw", reliable)
@@ -104,7 +110,9 @@ def publish(seconds: float, frame: str, description: bool) -> None:
         msg = WrenchStamped()
         _stamp(msg.header.stamp, EPOCH_NS + k * PERIOD_NS)
         msg.header.frame_id = frame
-        w = (predicted + contact(k)).tolist()
+        w = (predicted + (SHIFT if still else contact(k))).tolist()
+        if nan and k % 2:
+            w[2] = float("nan")
         f, m = msg.wrench.force, msg.wrench.torque
         f.x, f.y, f.z, m.x, m.y, m.z = w
         wrenches.publish(msg)
@@ -141,9 +149,9 @@ def rebias(out: str) -> None:
     node = Node("client")
     client = node.create_client(Trigger, "/ftcomp/rebias")
     result: list[object] = [False, "service not available"]
-    if client.wait_for_service(timeout_sec=20.0):
+    if client.wait_for_service(timeout_sec=120.0):
         future = client.call_async(Trigger.Request())
-        rclpy.spin_until_future_complete(node, future, timeout_sec=30.0)
+        rclpy.spin_until_future_complete(node, future, timeout_sec=60.0)
         if future.result() is not None:
             result = [future.result().success, future.result().message]
     with open(out, "w", encoding="utf-8") as handle:
@@ -157,7 +165,14 @@ if __name__ == "__main__":
         mode = sys.argv[1]
         if mode == "publish":
             frame = next((a for a in sys.argv[3:] if not a.startswith("--")), "ft_sensor")
-            publish(float(sys.argv[2]), frame, "--description" in sys.argv)
+            flags = set(sys.argv[3:])
+            publish(
+                float(sys.argv[2]),
+                frame,
+                "--description" in flags,
+                "--still" in flags,
+                "--nan" in flags,
+            )
         elif mode == "subscribe":
             subscribe(sys.argv[2], int(sys.argv[3]), float(sys.argv[4]), sys.argv[5])
         else:

@@ -40,17 +40,16 @@ from numpy.typing import NDArray
 from ftcomp.errors import HardwareError, InputFileError, ParameterError
 from ftcomp.hardware.protocols import ClockName, PoseSample, Robot, WrenchSample, WrenchSensor
 from ftcomp.hardware.registry import Uri
+from ftcomp.ros2.node_config import QOS_CHOICES, check_topic_name
 from ftcomp.ros2.rclpy_runtime import (
     DEFAULT_QOS,
     DESCRIPTION_QOS,
-    QOS_CHOICES,
     JointState,
     Ros2Runtime,
     String,
     TwistStamped,
     WrenchStamped,
     check_domain,
-    check_topic_name,
     qos_profile,
     stamp_ns,
     twist_stamped,

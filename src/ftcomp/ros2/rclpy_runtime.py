@@ -10,7 +10,8 @@ robot, the compensation node) live side by side in one process and shut down ind
 gives the environment that keeps a participant on 127.0.0.1: ``ROS_AUTOMATIC_DISCOVERY_RANGE=
 LOCALHOST`` (Kilted ignores ``ROS_LOCALHOST_ONLY``) and a Fast DDS XML profile that whitelists
 127.0.0.1 with the built-in transports off (no multicast, no shared memory). ftcomp's tests and
-benchmark run every participant so; on a single machine users set the same (docs/ros2.md). It must be in the environment before the first participant of the process starts.
+benchmark run every participant so; on a single machine users set the same (docs/ros2.md).
+It must be in the environment before the first participant of the process starts.
 
 **Time.** A message's ``header.stamp`` is integer nanoseconds of ROS time (the system clock
 without ``use_sim_time``); readings are stamped on arrival with the host's monotonic clock, the
@@ -21,7 +22,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import re
 import threading
 from pathlib import Path
 from types import TracebackType
@@ -31,13 +31,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.errors import HardwareError, ParameterError
+from ftcomp.ros2.node_config import QOS_CHOICES
 
 try:  # the optional extra, or a sourced ROS 2
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
     from geometry_msgs.msg import TwistStamped, WrenchStamped
+    from rclpy.callback_groups import ReentrantCallbackGroup
     from rclpy.context import Context
-    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.executors import (
+        Executor,
+        ExternalShutdownException,
+        MultiThreadedExecutor,
+        SingleThreadedExecutor,
+    )
     from rclpy.node import Node
     from rclpy.qos import (
         DurabilityPolicy,
@@ -60,18 +67,17 @@ __all__ = [
     "DEFAULT_QOS",
     "DESCRIPTION_QOS",
     "LOOPBACK_PROFILE_XML",
-    "QOS_CHOICES",
     "DiagnosticArray",
     "DiagnosticStatus",
     "JointState",
     "KeyValue",
+    "ReentrantCallbackGroup",
     "Ros2Runtime",
     "String",
     "Trigger",
     "TwistStamped",
     "WrenchStamped",
     "check_domain",
-    "check_topic_name",
     "loopback_environment",
     "qos_profile",
     "stamp_msg",
@@ -106,28 +112,12 @@ LOOPBACK_PROFILE_XML = """<?xml version="1.0" encoding="UTF-8" ?>
 </dds>
 """
 
-#: The QoS a subscription to a sensor topic may ask for: ``best_effort`` (matches reliable
-#: and best-effort publishers, ROS 2's ``SensorDataQoS``), ``reliable`` (reliable publishers
-#: only; nothing is dropped by the middleware).
-QOS_CHOICES = ("best_effort", "reliable")
-
-
 #: rclcpp's default publisher QoS: reliable, keep last 10, volatile.
 DEFAULT_QOS = QoSProfile(depth=10)
 #: robot_state_publisher's ``/robot_description``: reliable, transient local, keep last 1.
 DESCRIPTION_QOS = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
 )
-_TOPIC = re.compile(r"^(/[A-Za-z_][A-Za-z0-9_]*)+$")
-
-
-def check_topic_name(topic: str, where: str) -> str:
-    """``topic`` if it is an absolute ROS 2 topic name, else a ParameterError naming ``where``."""
-    if not _TOPIC.match(topic):
-        raise ParameterError(
-            f"{where}: {topic!r} is not an absolute ROS 2 topic name (e.g. /ft_sensor/wrench)"
-        )
-    return topic
 
 
 def loopback_environment(directory: str | os.PathLike[str]) -> dict[str, str]:
@@ -218,6 +208,8 @@ class Ros2Runtime:
         domain_id: the ROS_DOMAIN_ID; None: the environment's (``ROS_DOMAIN_ID``, else 0).
         arguments: ROS command-line arguments (``["--ros-args", "-p", "name:=value"]``): the
             node's parameter overrides and remappings, as ``ros2 run`` passes them.
+        threads: the executor's threads (1: callbacks one at a time; more lets a slow service
+            run beside the subscriptions, in a callback group of its own).
 
     Entering starts the participant and the executor; callbacks run on the executor's thread.
     Leaving stops the executor, destroys the node and shuts the context down.
@@ -229,15 +221,17 @@ class Ros2Runtime:
         *,
         domain_id: int | None = None,
         arguments: list[str] | None = None,
+        threads: int = 1,
     ) -> None:
         if domain_id is not None:
             check_domain(domain_id, f"node {node_name!r}")
         self.node_name = node_name
         self.domain_id = domain_id
         self.arguments = list(arguments or [])
+        self.threads = threads
         self._context: Context | None = None
         self._node: Node | None = None
-        self._executor: SingleThreadedExecutor | None = None
+        self._executor: Executor | None = None
         self._thread: threading.Thread | None = None
 
     @property
@@ -259,7 +253,11 @@ class Ros2Runtime:
         self._context = context
         try:
             self._node = Node(self.node_name, context=context)
-            self._executor = SingleThreadedExecutor(context=context)
+            self._executor = (
+                SingleThreadedExecutor(context=context)
+                if self.threads == 1
+                else MultiThreadedExecutor(self.threads, context=context)
+            )
             self._executor.add_node(self._node)
         except BaseException:
             self._close()

@@ -1,0 +1,359 @@
+"""``ftcomp ros2 node``: gravity compensation as a ROS 2 node (rclpy).
+
+The node (``ftcomp`` by default) subscribes to a sensor's raw ``geometry_msgs/WrenchStamped``
+(sensor frame) and the arm's ``sensor_msgs/JointState``, and with the URDF (a file, or the
+``/robot_description`` string robot_state_publisher latches) knows the sensor's orientation.
+For each raw reading it publishes, with the reading's own ``header.stamp``:
+
+- ``~/wrench_compensated``: the contact wrench in the sensor frame (bias and tool gravity
+  removed: :class:`~ftcomp.compensation.compensator.GravityCompensator`);
+- ``~/wrench_contact_base``: the same wrench in the base frame's orientation (force and torque
+  rotated by ``R_base_sensor``; the torque still about the sensor origin), ``frame_id`` the base.
+
+Services (``std_srvs/Trigger``): ``~/rebias`` re-estimates the bias from ``rebias_s`` of readings
+with the arm still and nothing touching the tool (:func:`~ftcomp.calibration.rebias.rebias`);
+``~/reload_calibration`` reads ``calibration_file`` again. Both answer ``success`` and a line.
+
+A reading that cannot be compensated honestly publishes nothing and says why on
+``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``, status ``ftcomp: compensation``, at once
+on a change and every second): non-finite values, a ``frame_id`` other than ``sensor_frame``,
+no joint states yet or joint states older than ``stale_s``. Its settings are ROS 2 parameters
+(:class:`~ftcomp.ros2.node_config.NodeConfig`'s fields, ``--ros-args -p calibration_file:=...``).
+
+Joint states are not interpolated: each reading takes the newest (``stale_s`` bounds their age).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ftcomp.calibration.rebias import rebias
+from ftcomp.calibration_record import Calibration
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.errors import FtcompError, HardwareError, ParameterError
+from ftcomp.io.calibration_json import load_calibration
+from ftcomp.ros2.live import JointStatePose, robot_description, urdf_chain, wait_for
+from ftcomp.ros2.node_config import NodeConfig
+from ftcomp.ros2.rclpy_runtime import (
+    DEFAULT_QOS,
+    DiagnosticArray,
+    DiagnosticStatus,
+    JointState,
+    KeyValue,
+    ReentrantCallbackGroup,
+    Ros2Runtime,
+    Trigger,
+    WrenchStamped,
+    qos_profile,
+    wrench_of,
+)
+from ftcomp.ros2.tf import clean_frame
+from ftcomp.samples import Samples
+
+__all__ = ["MOVED_M", "TURNED_RAD", "CompensationNode"]
+
+#: How far the sensor may move [m] and turn [rad] while ``~/rebias`` reads: further, the arm
+#: was not still (the same bounds as ``--rebias-s``).
+MOVED_M = 1e-3
+TURNED_RAD = 0.005
+
+
+@dataclass
+class _Status:
+    """What the node last said on /diagnostics."""
+
+    level: bytes
+    message: str
+    published: int = 0
+    dropped: int = 0
+
+
+class CompensationNode:
+    """The compensation node, inside a :class:`~ftcomp.ros2.rclpy_runtime.Ros2Runtime`.
+
+    Args:
+        settings: :class:`~ftcomp.ros2.node_config.NodeConfig` field values a program or the
+            command line gives (a ``-p name:=value`` in ``arguments`` overrides one, as ROS 2
+            parameters do).
+        node_name: the node's name.
+        domain_id: the ROS_DOMAIN_ID (None: the environment's).
+        arguments: ROS arguments (``["--ros-args", "-p", "rebias_s:=3.0"]``).
+
+    Entering starts the node: reads the calibration and the URDF (a missing frame, an
+    unreadable file: an error before anything is published), waits ``timeout_s`` for joint
+    states naming the chain's joints. Leaving stops it.
+    """
+
+    def __init__(
+        self,
+        settings: Mapping[str, Any] | None = None,
+        *,
+        node_name: str = "ftcomp",
+        domain_id: int | None = None,
+        arguments: list[str] | None = None,
+    ) -> None:
+        self._given = dict(settings or {})
+        unknown = sorted(set(self._given) - {f.name for f in fields(NodeConfig)})
+        if unknown:
+            raise ParameterError(f"unknown node settings: {', '.join(unknown)}", field=unknown[0])
+        self.runtime = Ros2Runtime(node_name, domain_id=domain_id, arguments=arguments, threads=2)
+        self.config: NodeConfig | None = None
+        self._lock = threading.Lock()
+        self._compensator: GravityCompensator | None = None
+        self._calibration: Calibration | None = None
+        self._R_rec_sensor_T: NDArray[np.float64] | None = None
+        self._pose: JointStatePose | None = None
+        self._status = _Status(DiagnosticStatus.OK, "starting")
+        self._collect: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]]
+        self._collect = []
+        self._collecting = False
+        self._pub_sensor: Any = None
+        self._pub_base: Any = None
+        self._pub_diag: Any = None
+
+    # ----------------------------------------------------------------- start and stop
+    def __enter__(self) -> CompensationNode:
+        runtime = self.runtime.__enter__()
+        try:
+            self._start(runtime)
+        except BaseException:
+            self.runtime.__exit__(None, None, None)
+            raise
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.runtime.__exit__(None, None, None)
+
+    def _parameters(self, runtime: Ros2Runtime) -> NodeConfig:
+        """The config from the node's parameters, declared with the given config's values."""
+        node = runtime.node
+        values: dict[str, Any] = {}
+        for f in fields(NodeConfig):
+            given = self._given.get(f.name)
+            if given is None:
+                given = f.default if isinstance(f.default, (str, float)) else ""
+            default: float | str = float(given) if isinstance(given, float) else str(given)
+            try:
+                values[f.name] = node.declare_parameter(f.name, default).value
+            except Exception as exc:  # rclpy's: an override of another type
+                kind = "a number" if isinstance(default, float) else "a string"
+                raise ParameterError(
+                    f"ROS parameter {f.name} must be {kind} ({type(exc).__name__})", field=f.name
+                ) from None
+        return NodeConfig(**values)
+
+    def _start(self, runtime: Ros2Runtime) -> None:
+        self.config = config = self._parameters(runtime)
+        self._load(config.calibration_file)
+        chain = urdf_chain(
+            config.urdf or None,
+            None
+            if config.urdf
+            else robot_description(runtime, "/robot_description", config.timeout_s),
+            clean_frame(config.base_frame),
+            clean_frame(config.sensor_frame),
+        )
+        node = runtime.node
+        self._pose = JointStatePose(chain, config.joint_states)
+        node.create_subscription(
+            JointState,
+            config.joint_states,
+            self._pose.on_joint_state,
+            qos_profile("best_effort", 10),
+        )
+        if not wait_for(
+            self._pose.arrived,
+            runtime,
+            config.joint_states,
+            "sensor_msgs/msg/JointState",
+            config.timeout_s,
+        ):
+            raise HardwareError(
+                f"no joint states naming {', '.join(self._pose.missing())} on "
+                f"{config.joint_states} within {config.timeout_s:g} s"
+            )
+        self._pub_sensor = node.create_publisher(WrenchStamped, "~/wrench_compensated", DEFAULT_QOS)
+        self._pub_base = node.create_publisher(WrenchStamped, "~/wrench_contact_base", DEFAULT_QOS)
+        self._pub_diag = node.create_publisher(DiagnosticArray, "/diagnostics", DEFAULT_QOS)
+        services = ReentrantCallbackGroup()  # a rebias reads for seconds: beside the readings
+        node.create_service(Trigger, "~/rebias", self._on_rebias, callback_group=services)
+        node.create_service(
+            Trigger, "~/reload_calibration", self._on_reload, callback_group=services
+        )
+        node.create_subscription(
+            WrenchStamped, config.wrench_topic, self._on_wrench, qos_profile(config.wrench_qos, 100)
+        )
+        node.create_timer(1.0, self._publish_status)
+        self._say(DiagnosticStatus.OK, "compensating")
+
+    def _load(self, path: str) -> Calibration:
+        calibration = load_calibration(path)
+        compensator = GravityCompensator(calibration)
+        mount = calibration.mount
+        with self._lock:
+            self._calibration, self._compensator = calibration, compensator
+            self._R_rec_sensor_T = None if mount is None else mount.R_rec_sensor.T.copy()
+        return calibration
+
+    # ----------------------------------------------------------------- the readings
+    def _on_wrench(self, msg: WrenchStamped) -> None:
+        config, pose = self.config, self._pose
+        assert config is not None and pose is not None
+        wrench = wrench_of(msg)
+        frame = clean_frame(msg.header.frame_id)
+        if frame != config.sensor_frame:
+            self._drop(f"a wrench in frame {frame!r}, the calibration's is {config.sensor_frame!r}")
+            return
+        if not all(math.isfinite(v) for v in wrench):
+            self._drop(f"a non-finite wrench on {config.wrench_topic}")
+            return
+        now = time.monotonic_ns()
+        try:
+            t_pose, p, R = pose.pose()
+        except HardwareError as exc:
+            self._drop(str(exc))
+            return
+        if now - t_pose > config.stale_s * 1e9:
+            self._drop(
+                f"joint states on {config.joint_states} {(now - t_pose) / 1e9:.3f} s old "
+                f"(stale after {config.stale_s:g} s)"
+            )
+            return
+        with self._lock:
+            compensator, R_T = self._compensator, self._R_rec_sensor_T
+            if self._collecting:
+                self._collect.append((wrench, R, p))
+        assert compensator is not None
+        R_feed = R if R_T is None else R @ R_T  # a mount-identified calibration's frame
+        contact = compensator.compensate(wrench, R_feed)
+        out = WrenchStamped()
+        out.header.stamp = msg.header.stamp
+        out.header.frame_id = msg.header.frame_id
+        _fill(out, contact)
+        self._pub_sensor.publish(out)
+        base = WrenchStamped()
+        base.header.stamp = msg.header.stamp
+        base.header.frame_id = config.base_frame
+        _fill(base, np.concatenate([R @ contact[:3], R @ contact[3:]]))
+        self._pub_base.publish(base)
+        with self._lock:
+            self._status.published += 1
+            back = self._status.level != DiagnosticStatus.OK
+        if back:
+            self._say(DiagnosticStatus.OK, "compensating")
+
+    def _drop(self, why: str) -> None:
+        message = why + ": nothing published"
+        with self._lock:
+            self._status.dropped += 1
+            changed = self._status.message != message
+        if changed:
+            self._say(DiagnosticStatus.ERROR, message)
+
+    # ----------------------------------------------------------------- diagnostics
+    def _say(self, level: bytes, message: str) -> None:
+        with self._lock:
+            self._status.level, self._status.message = level, message
+        if level != DiagnosticStatus.OK:
+            self.runtime.node.get_logger().warning(message)
+        self._publish_status()
+
+    def _publish_status(self) -> None:
+        if self._pub_diag is None:
+            return
+        with self._lock:
+            s = self._status
+            status = DiagnosticStatus(
+                level=s.level,
+                name="ftcomp: compensation",
+                hardware_id=self.config.sensor_frame if self.config else "",
+                message=s.message,
+                values=[
+                    KeyValue(key="published", value=str(s.published)),
+                    KeyValue(key="dropped", value=str(s.dropped)),
+                ],
+            )
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.runtime.node.get_clock().now().to_msg()
+        self._pub_diag.publish(array)
+
+    # ----------------------------------------------------------------- services
+    def _on_rebias(self, _request: Any, response: Any) -> Any:
+        config = self.config
+        assert config is not None
+        with self._lock:
+            self._collect, self._collecting = [], True
+        time.sleep(config.rebias_s)
+        with self._lock:
+            got, self._collecting = self._collect, False
+            calibration, R_T = self._calibration, self._R_rec_sensor_T
+        assert calibration is not None
+        response.success, response.message = False, ""
+        if len(got) < 2:
+            response.message = (
+                f"{len(got)} readings in {config.rebias_s:g} s: nothing to rebias from"
+            )
+            return response
+        wrench = np.array([w for w, _, _ in got])
+        R = np.array([r for _, r, _ in got])
+        p = np.array([q for _, _, q in got])
+        moved = float(np.linalg.norm(p - p[0], axis=1).max())
+        cos = (np.einsum("nij,ij->n", R, R[0]) - 1.0) / 2.0
+        turned = float(np.arccos(np.clip(cos, -1.0, 1.0)).max())
+        if moved > MOVED_M or turned > TURNED_RAD:
+            response.message = (
+                f"the arm moved while the bias was read ({moved * 1e3:.1f} mm, "
+                f"{math.degrees(turned):.2f} deg): bias kept"
+            )
+            return response
+        R_rec = R if R_T is None else R @ R_T
+        samples = Samples(wrench, R_rec, "quaternion", source="the still readings")
+        try:
+            new = rebias(calibration, samples)
+        except FtcompError as exc:
+            response.message = str(exc)
+            return response
+        shift = np.concatenate([new.model.force_bias_N, new.model.torque_bias_Nm]) - np.concatenate(
+            [calibration.model.force_bias_N, calibration.model.torque_bias_Nm]
+        )
+        with self._lock:
+            self._calibration, self._compensator = new, GravityCompensator(new)
+        response.success = True
+        response.message = (
+            f"re-biased from {len(got)} still readings: the bias moved by "
+            f"[{shift[0]:+.3f} {shift[1]:+.3f} {shift[2]:+.3f}] N "
+            f"[{shift[3]:+.4f} {shift[4]:+.4f} {shift[5]:+.4f}] N*m"
+        )
+        return response
+
+    def _on_reload(self, _request: Any, response: Any) -> Any:
+        config = self.config
+        assert config is not None
+        try:
+            self._load(config.calibration_file)
+        except FtcompError as exc:
+            response.success, response.message = False, f"{exc} (the previous one kept)"
+            return response
+        response.success, response.message = True, f"reloaded {config.calibration_file}"
+        return response
+
+    # ----------------------------------------------------------------- for programs
+    @property
+    def calibration(self) -> Calibration | None:
+        """The calibration in use (after a rebias, the re-biased one)."""
+        with self._lock:
+            return self._calibration
+
+
+def _fill(msg: WrenchStamped, wrench: NDArray[np.float64]) -> None:
+    fx, fy, fz, tx, ty, tz = (float(v) for v in wrench)
+    f, m = msg.wrench.force, msg.wrench.torque
+    f.x, f.y, f.z, m.x, m.y, m.z = fx, fy, fz, tx, ty, tz

@@ -1,0 +1,207 @@
+"""``ftcomp ros2 node`` against rclpy nodes in other processes, on loopback (``ros2_graph``).
+
+A peer publishes a sensor's raw WrenchStamped and the arm's JointState; the node (in this
+process, or ``ftcomp ros2 node`` in its own) compensates; an rclpy subscriber peer collects
+``/ftcomp/wrench_compensated``, an rclpy client peer calls ``/ftcomp/rebias``.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rclpy")
+sys.path.insert(0, str(Path(__file__).parent))
+
+from rclpy_peer import EPOCH_NS, MODEL, PERIOD_NS, R_BASE_SENSOR, SHIFT, URDF, contact
+from ros2_graph import peer, ros2_graph_fixture, stop  # noqa: F401  (the fixture ros2_graph)
+
+from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.errors import InputFileError, ParameterError
+from ftcomp.io.calibration_json import FORMAT, model_to_dict
+from ftcomp.ros2.node import CompensationNode
+from ftcomp.ros2.rclpy_runtime import (
+    DiagnosticArray,
+    Ros2Runtime,
+    WrenchStamped,
+    qos_profile,
+    wrench_of,
+)
+
+
+@pytest.fixture
+def files(tmp_path: Path) -> dict[str, str]:
+    cal, urdf = tmp_path / "cal.json", tmp_path / "two_joint.urdf"
+    cal.write_text(json.dumps({"format": FORMAT, "method": "joint", **model_to_dict(MODEL)}))
+    urdf.write_text(URDF, encoding="utf-8")
+    return {
+        "calibration_file": str(cal),
+        "urdf": str(urdf),
+        "base_frame": "base",
+        "sensor_frame": "ft_sensor",
+        "wrench_topic": "/ft_raw",
+        "timeout_s": 120.0,
+    }
+
+
+def test_the_node_publishes_the_compensated_wrench_with_the_raw_stamps(
+    ros2_graph: int, tmp_path: Path, files: dict[str, str]
+) -> None:
+    out, out_base = tmp_path / "sensor.json", tmp_path / "base.json"
+    subscribers = [
+        peer("subscribe", "/ftcomp/wrench_compensated", 200, 150, out),
+        peer("subscribe", "/ftcomp/wrench_contact_base", 200, 150, out_base),
+    ]
+    publisher = peer("publish", 150)
+    try:
+        with CompensationNode(files) as node, Ros2Runtime("observer") as observer:
+            deadline = time.monotonic() + 120
+            while "ftcomp" not in observer.node.get_node_names() and time.monotonic() < deadline:
+                time.sleep(0.05)
+            assert "ftcomp" in observer.node.get_node_names()  # rclpy's graph lists it
+            for proc in subscribers:
+                proc.wait(timeout=160)
+            assert node.config is not None and node.config.rebias_s == 2.0
+    finally:
+        stop(publisher, *subscribers)
+    compensator = GravityCompensator(MODEL)
+    R = R_BASE_SENSOR.as_matrix()
+    raw_of = MODEL.predict(R)
+    for path, frame, rotate in ((out, "ft_sensor", False), (out_base, "base", True)):
+        received = json.loads(path.read_text())
+        assert len(received) >= 200
+        for stamp, frame_id, *wrench in received:
+            k, rest = divmod(stamp - EPOCH_NS, PERIOD_NS)
+            assert rest == 0 and frame_id == frame  # the raw reading's own stamp
+            expected = compensator.compensate(raw_of + contact(k), R)
+            if rotate:
+                expected = np.concatenate([R @ expected[:3], R @ expected[3:]])
+            # Exact algebra on the same doubles as GravityCompensator's: its rounding only.
+            np.testing.assert_allclose(wrench, expected, atol=1e-9)
+
+
+def test_rebias_through_the_trigger_service_takes_the_moved_bias(
+    ros2_graph: int, tmp_path: Path, files: dict[str, str]
+) -> None:
+    out = tmp_path / "rebias.json"
+    publisher = peer("publish", 150, "--still")
+    try:
+        with CompensationNode({**files, "rebias_s": 0.5}) as node:
+            client = peer("rebias", out)
+            client.wait(timeout=160)
+            calibration = node.calibration
+    finally:
+        stop(publisher)
+    success, message = json.loads(out.read_text())
+    assert success, message
+    assert message.startswith("re-biased from") and "[+0.300 -0.200 +0.500] N" in message
+    assert calibration is not None
+    # Still readings of the tool at rest with the bias moved: the new bias is the old plus
+    # the shift, to the rounding of a mean of identical doubles.
+    np.testing.assert_allclose(
+        calibration.model.force_bias_N, MODEL.force_bias_N + SHIFT[:3], atol=1e-9
+    )
+    np.testing.assert_allclose(
+        calibration.model.torque_bias_Nm, MODEL.torque_bias_Nm + SHIFT[3:], atol=1e-9
+    )
+
+
+def _watch(seconds: float, until: str, published: int) -> tuple[list[str], list[list[float]]]:
+    """ftcomp's diagnostics and compensated wrenches, until a status says ``until`` and
+    ``published`` wrenches came (or ``seconds`` passed)."""
+    said: list[str] = []
+    wrenches: list[list[float]] = []
+    done = threading.Event()
+
+    def check() -> None:
+        if any(until in line for line in said) and len(wrenches) >= published:
+            done.set()
+
+    def on_diag(msg: DiagnosticArray) -> None:
+        said.extend(f"{status.level[0]} {status.message}" for status in msg.status)
+        check()
+
+    def on_wrench(msg: WrenchStamped) -> None:
+        wrenches.append(wrench_of(msg).tolist())
+        check()
+
+    with Ros2Runtime("watcher") as watcher:
+        qos = qos_profile("reliable", 1000)
+        watcher.node.create_subscription(DiagnosticArray, "/diagnostics", on_diag, qos)
+        watcher.node.create_subscription(
+            WrenchStamped, "/ftcomp/wrench_compensated", on_wrench, qos
+        )
+        done.wait(seconds)
+        time.sleep(0.5)  # what the node published meanwhile arrives too
+    return said, wrenches
+
+
+@pytest.mark.parametrize(
+    ("flags", "says", "published"),
+    [
+        (("tool0",), "a wrench in frame 'tool0', the calibration's is 'ft_sensor'", 0),
+        (("--nan",), "a non-finite wrench on /ft_raw", 20),
+    ],
+)
+def test_bad_readings_publish_nothing_and_say_why_on_diagnostics(
+    ros2_graph: int, files: dict[str, str], flags: tuple[str, ...], says: str, published: int
+) -> None:
+    publisher = peer("publish", 150, *flags)
+    try:
+        with CompensationNode(files):
+            said, wrenches = _watch(120, says, published)
+    finally:
+        stop(publisher)
+    assert f"2 {says}: nothing published" in said, said  # level 2: ERROR
+    if published:  # every other reading is NaN: the finite ones go on
+        assert len(wrenches) >= published and np.isfinite(wrenches).all()
+    else:
+        assert wrenches == []
+
+
+def test_a_urdf_without_the_frames_stops_the_node_at_start(
+    ros2_graph: int, files: dict[str, str]
+) -> None:
+    with pytest.raises(InputFileError, match=r"link 'tool0' is not in the URDF"):
+        CompensationNode({**files, "sensor_frame": "tool0"}).__enter__()
+
+
+def test_a_ros_parameter_of_the_wrong_type_names_the_parameter(
+    ros2_graph: int, files: dict[str, str]
+) -> None:
+    node = CompensationNode(files, arguments=["--ros-args", "-p", "rebias_s:=fast"])
+    with pytest.raises(ParameterError, match="ROS parameter rebias_s must be a number"):
+        node.__enter__()
+
+
+def test_the_command_takes_ros_parameters_and_says_bad_input_in_one_line(
+    ros2_graph: int, files: dict[str, str]
+) -> None:
+    """``ftcomp ros2 node`` in its own process: ``-p`` sets what the options did not; a URDF
+    without the sensor frame is one line, exit 2."""
+    main = "import sys; from ftcomp.cli import main; sys.exit(main(sys.argv[1:]))"
+    cmd = [sys.executable, "-c", main, "ros2", "node", "--calibration"]
+    cmd += [files["calibration_file"], "--base-frame", "base", "--urdf", files["urdf"]]
+    cmd += ["--timeout-s", "120", "--seconds", "0.1", "--ros-args", "-p"]
+    bad = subprocess.run([*cmd, "sensor_frame:=tool0"], capture_output=True, text=True, timeout=200)
+    assert bad.returncode == 2
+    assert bad.stderr.count("\n") == 1 and "link 'tool0' is not in the URDF" in bad.stderr
+    publisher = peer("publish", 150)
+    try:
+        good = subprocess.run(
+            [*cmd, "sensor_frame:=ft_sensor", "-p", "wrench_topic:=/ft_raw"],
+            capture_output=True,
+            text=True,
+            timeout=200,
+        )
+    finally:
+        stop(publisher)
+    assert good.returncode == 0, good.stderr
+    assert "node ftcomp: /ft_raw compensated with" in good.stdout
