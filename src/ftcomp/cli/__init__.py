@@ -53,10 +53,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "re-estimate only the sensor bias from still readings, the tool model kept",
     ),
     "poses": ("ftcomp.cli.poses", "design calibration poses (D-optimal, reachable, short travel)"),
-    "payload": (
-        "ftcomp.cli.payload",
-        "write a calibration's tool mass and centre of gravity to a UR controller",
-    ),
     "ros2": ("ftcomp.cli.ros2", "ROS 2: gravity compensation as a node (ftcomp ros2 node)"),
     "calibrate-dynamic": (
         "ftcomp.cli.calibrate_dynamic",
