@@ -156,13 +156,13 @@ def test_moveJ_IK_moves_the_tcp_to_the_pose(clients) -> None:
 
 
 def test_a_command_the_twin_does_not_model_fails_as_a_stopped_program() -> None:
-    """zeroFtSensor (force mode's companion, not modelled): ur_rtde sees the program end and
-    returns False, never True for a command that did nothing."""
+    """teachMode (not modelled): ur_rtde sees the program end and returns False, never True
+    for a command that did nothing."""
     with running_twin("test_unmodelled_command", seconds=30.0) as twin:
         control = rtde_control.RTDEControlInterface(twin.robot_host)
         try:
-            assert not control.zeroFtSensor()
+            assert not control.teachMode()
             assert not control.isProgramRunning()
         finally:
             control.disconnect()
-        assert "command 8 (zeroFtSensor) of the control script is not modelled" in twin.output()
+        assert "command 18 (teachMode) of the control script is not modelled" in twin.output()

@@ -53,7 +53,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "re-estimate only the sensor bias from still readings, the tool model kept",
     ),
     "poses": ("ftcomp.cli.poses", "design calibration poses (D-optimal, reachable, short travel)"),
-    "ros2": ("ftcomp.cli.ros2", "ROS 2: gravity compensation as a node (ftcomp ros2 node)"),
+    "payload": (
+        "ftcomp.cli.payload",
+        "write a calibration's tool mass and centre of gravity to a UR controller",
+    ),
     "calibrate-dynamic": (
         "ftcomp.cli.calibrate_dynamic",
         "identify the tool's inertia tensor from a recorded fast excitation trajectory",

@@ -37,10 +37,12 @@ command, so recording by hand (free-drive) and streaming never move the robot.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import math
 import threading
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from types import TracebackType
 from typing import Any, Final
 
@@ -55,7 +57,7 @@ from ftcomp.hardware.protocols import ClockName, PoseSample, Robot
 from ftcomp.hardware.registry import Uri
 from ftcomp.hardware.rtde_probe import probe_rtde
 
-__all__ = ["RECEIVE_VARIABLES", "URRobot", "open_robot"]
+__all__ = ["RECEIVE_VARIABLES", "Payload", "URRobot", "open_robot", "set_payload"]
 
 #: RTDE outputs the backend reads (``ft_raw_wrench`` is added on PolyScope 5.9 or later).
 RECEIVE_VARIABLES = (
@@ -197,6 +199,7 @@ class URRobot(LatenessOfPacer):
                 control, self.control = self.control, None
                 if self._silent:  # stopScript would wait for the program's end in silent data
                     _bounded(control.disconnect, "ur-disconnect")
+                    _abandon(control)
                 else:
                     control.stopScript()
                     control.disconnect()
@@ -204,6 +207,7 @@ class URRobot(LatenessOfPacer):
                 receive, self.receive = self.receive, None
                 if self._silent:
                     _bounded(receive.disconnect, "ur-disconnect")
+                    _abandon(receive)
                 else:
                     receive.disconnect()
 
@@ -539,6 +543,111 @@ def _bounded(call: Callable[[], object], name: str) -> bool:
     worker.start()
     worker.join(_EXIT_WAIT_S)
     return returned.is_set()
+
+
+#: ur_rtde interfaces whose controller went silent, kept until the process ends (see _abandon).
+_ABANDONED: list[object] = []
+
+
+def _abandon(interface: object) -> None:
+    """Never destroy a ur_rtde interface whose controller went silent.
+
+    Its receive thread (the control interface has one of its own) reconnects without a time
+    limit once the data stop, and ``disconnect`` may return without joining it; destroying the
+    interface then destroys a joinable ``std::thread``: ``terminate called without an active
+    exception``, the process killed (exit -6) after ``run`` had stopped on the fault (ur_rtde
+    1.6.5; issue 34). So the interface is kept, with a reference the interpreter never drops
+    (not even when it clears modules at exit), and the operating system reclaims its thread
+    and sockets when the process ends."""
+    _ABANDONED.append(interface)
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(interface))
+
+
+@dataclass(frozen=True)
+class Payload:
+    """A UR controller's payload setting.
+
+    Attributes:
+        mass_kg: the payload's mass [kg].
+        cog_flange_m: its centre of gravity from the tool flange, flange frame [m], (3,) (as
+            URScript's ``set_payload`` takes it).
+    """
+
+    mass_kg: float
+    cog_flange_m: tuple[float, float, float]
+
+
+def set_payload(
+    host: str, mass_kg: float, cog_tcp_m: NDArray[np.float64], *, label: str = ""
+) -> tuple[Payload, Payload]:
+    """Write the payload to a UR controller (ur_rtde's ``setPayload``); ``(before, after)``,
+    both as RTDE's ``payload`` and ``payload_cog`` report them.
+
+    The centre of gravity is given in the controller's TCP frame and written from the flange
+    (``setPayload``'s frame), through the TCP offset the controller reports (``getTCPOffset``).
+
+    Args:
+        host: the controller's address.
+        mass_kg: the payload's mass [kg], in [0, 100].
+        cog_tcp_m: its centre of gravity in the TCP frame [m], (3,), each within 2 m.
+        label: names the controller in messages (default: the host).
+
+    Raises:
+        ParameterError: a value out of range, or ur_rtde missing.
+        HardwareError: the controller cannot be reached or refused the setting.
+    """
+    name = label or host
+    cog = np.asarray(cog_tcp_m, dtype=float)
+    if not (math.isfinite(mass_kg) and 0.0 <= mass_kg <= _MAX_PAYLOAD_KG):
+        raise ParameterError(f"mass_kg must be in [0, {_MAX_PAYLOAD_KG:g}] kg, got {mass_kg:g}")
+    if cog.shape != (3,) or not np.all(np.isfinite(cog)) or np.any(np.abs(cog) > 2.0):
+        raise ParameterError(f"cog_tcp_m must be 3 finite numbers within 2 m, got {cog_tcp_m!r}")
+    try:
+        import rtde_control
+        import rtde_receive
+    except ImportError:
+        raise ParameterError("ur:// needs ur_rtde: pip install -e '.[ur]'") from None
+    try:
+        receive = rtde_receive.RTDEReceiveInterface(host, 125.0, ["payload", "payload_cog"])
+    except RuntimeError as exc:
+        raise HardwareError(f"{name}: ur_rtde could not connect: {exc}") from None
+    try:
+        before = Payload(
+            float(receive.getPayload()),
+            tuple(map(float, receive.getPayloadCog())),  # type: ignore[arg-type]
+        )
+        try:
+            control = rtde_control.RTDEControlInterface(host)
+        except RuntimeError as exc:
+            raise HardwareError(f"{name}: cannot take control of the arm: {exc}") from None
+        try:
+            offset = control.getTCPOffset()
+            R_flange_tcp = matrix_from_rotvec(offset[3:6])
+            cog_flange = np.array(offset[:3], dtype=float) + R_flange_tcp @ cog
+            if not control.setPayload(float(mass_kg), cog_flange.tolist()):
+                raise HardwareError(f"{name}: the controller refused setPayload")
+        finally:
+            control.stopScript()
+            control.disconnect()
+        deadline = time.monotonic() + 1.0  # the next packages carry it
+        while True:
+            after = Payload(
+                float(receive.getPayload()),
+                tuple(map(float, receive.getPayloadCog())),  # type: ignore[arg-type]
+            )
+            done = abs(after.mass_kg - mass_kg) < 1e-9 and np.allclose(
+                after.cog_flange_m, cog_flange, atol=1e-9
+            )
+            if done or time.monotonic() > deadline:
+                break
+            time.sleep(0.01)
+    finally:
+        receive.disconnect()
+    return before, after
+
+
+#: The largest payload set_payload accepts [kg] (above any UR's rated payload, 30 kg).
+_MAX_PAYLOAD_KG: Final = 100.0
 
 
 def _option_positive(uri: Uri, name: str, value: float | None) -> float:

@@ -19,7 +19,9 @@ program's main loop, every controller cycle:
   and ur_rtde's call returns False;
 - answers go to ``output_int_register_1`` (yes/no of 36, 60, 61) and
   ``output_double_register_0..5`` (joint positions of 30 and 46, the pose of 43, 44, the
-  TCP offset of 40); 255 ends the program.
+  TCP offset of 40); ``set_payload`` (17) sets the payload RTDE reports and
+  ``actual_TCP_force`` subtracts, ``zero_ftsensor`` (8) zeroes ``actual_TCP_force`` (the face
+  does both, :class:`~ftcomp.twin.ur_face.UrFace`); 255 ends the program.
 
 Every command of ur_rtde 1.6's script (its ``process_cmd``) that this twin does not model
 ends the program with a line on stderr naming it: a client sees the failure a controller
@@ -113,7 +115,6 @@ _COMMAND_NAMES: Final = {
     5: "forceMode",
     6: "forceMode (update)",
     7: "forceModeStop",
-    8: "zeroFtSensor",
     11: "servoJ",
     12: "servoC",
     18: "teachMode",
@@ -282,6 +283,8 @@ class UrController:
         self.payload_kg = 0.0
         #: The payload's centre of gravity, flange frame [m] (``set_payload``'s ``cog``).
         self.payload_cog_m = np.zeros(3)
+        #: zero_ftsensor asked for (the face takes the offset from its next reading).
+        self.zero_ft_requested = False
         self._fk = mujoco.MjData(cell.model)
         self._ik_data = mujoco.MjData(cell.model)
         self._n = cell.n_joints
@@ -460,6 +463,8 @@ class UrController:
             self._out_pose(p_flange + R_flange @ p_tcp, R_flange @ R_tcp)
         elif cmd == 40:  # the TCP offset: the sensor's place on the flange
             self._out_pose(*self._tcp_offset())
+        elif cmd == 8:  # zero_ftsensor: the face zeroes actual_TCP_force at its next package
+            self.zero_ft_requested = True
         elif cmd == 17:  # set_payload (a zero cog keeps the one set before, as on PolyScope 5)
             self.payload_kg = self._in_float(0)
             cog = np.array([self._in_float(k) for k in (1, 2, 3)])

@@ -17,6 +17,14 @@ mode and the watchdog (a command the twin does not model ends the program, as a 
 does); ``actual_TCP_force`` and ``ft_raw_wrench`` are the wrist
 sensor's readings (the same physics, not a second sensor).
 
+The payload, as a UR handles it: ``set_payload(mass, cog)`` (the centre of gravity from the tool
+flange, in the flange frame) is what RTDE's ``payload`` and ``payload_cog`` report, and
+``actual_TCP_force`` is the reading less the payload's weight (its force in base orientation,
+down the base's z as the controller's installation has it, and its moment about the flange
+origin); ``zero_ftsensor`` makes ``actual_TCP_force`` read zero there from then on (an offset
+in the TCP frame, the mean of the next 0.1 s of readings: UR does not publish how many its
+zeroing averages). ``ft_raw_wrench`` stays raw.
+
 Faults (declared in :mod:`ftcomp.hardware.devices`): ``rtde-stop`` and ``network-loss`` (no
 more data packages, connections open), ``protective-stop``, ``script-stop``, ``latency``
 (every package 8-14 ms late).
@@ -33,6 +41,7 @@ from typing import Any, Final
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.frames import cross3, matrix_from_rotvec, rotvec_from_matrix
 from ftcomp.sim.cell import SimCell
 from ftcomp.twin.controller import UrController
@@ -51,6 +60,8 @@ __all__ = ["UrFace", "flange_wrenches"]
 _CYCLE_S: Final = 0.002
 _VERSION: Final = (5, 11, 1, 108318)
 _RTDE_PORT: Final = 30004
+#: zero_ftsensor averages this many periods' readings (0.1 s).
+_ZERO_PACKAGES: Final = 50
 #: The latency fault: each package this late, plus up to the jitter [s].
 _LATENCY_S: Final = 0.008
 _JITTER_S: Final = 0.004
@@ -116,6 +127,10 @@ class UrFace:
             matrix_from_rotvec(cell.config.rotvec_flange_sensor_rad),
             np.array(cell.config.p_flange_sensor_m, dtype=float),
         )
+        #: zero_ftsensor's offset, TCP frame: the mean of the readings (less the payload) of the
+        #: first _ZERO_PACKAGES periods after it (None: not zeroing now).
+        self.ft_offset = np.zeros(6)
+        self.zeroing: list[NDArray[np.float64]] | None = None
         self.sessions: list[RtdeSession] = []
         self.sessions_lock = threading.Lock()
         self.packets_closed = 0
@@ -223,7 +238,8 @@ class UrFace:
     def _state(self, wrench_sensor: NDArray[np.float64]) -> dict[str, object]:
         cell, ctl = self.cell, self.controller
         p, R = cell.sensor_pose()
-        tcp_force, raw_wrench = flange_wrenches(wrench_sensor, R, *self.tcp_offset)
+        _, raw_wrench = flange_wrenches(wrench_sensor, R, *self.tcp_offset)
+        tcp_force, _ = flange_wrenches(self._less_payload(wrench_sensor, R), R, *self.tcp_offset)
         runtime, robot_bits, robot_mode = ctl.status()
         q = cell.q_rad.tolist()
         qd = cell.data.qvel[: len(q)].tolist()
@@ -249,9 +265,30 @@ class UrFace:
             "target_speed_fraction": 1.0,
             "joint_mode": [255] * len(q),
             "payload": ctl.payload_kg,
+            "payload_cog": ctl.payload_cog_m.tolist(),
             "actual_main_voltage": 48.0,
             "actual_robot_voltage": 48.0,
         }
+
+    def _less_payload(
+        self, wrench_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """The reading less the payload's weight and zero_ftsensor's offset, TCP frame (torque
+        about the TCP origin)."""
+        ctl = self.controller
+        R_flange_tcp, p_flange_tcp = self.tcp_offset
+        f = R_base_tcp.T @ np.array([0.0, 0.0, -STANDARD_GRAVITY_MPS2 * ctl.payload_kg])
+        cog_tcp = R_flange_tcp.T @ (ctl.payload_cog_m - p_flange_tcp)
+        wrench = wrench_tcp - np.concatenate([f, cross3(cog_tcp, f)])
+        if ctl.zero_ft_requested:
+            ctl.zero_ft_requested = False
+            self.zeroing = []
+        if self.zeroing is not None:
+            self.zeroing.append(wrench)
+            if len(self.zeroing) >= _ZERO_PACKAGES:
+                self.ft_offset = np.mean(self.zeroing, axis=0)
+                self.zeroing = None
+        return wrench - self.ft_offset
 
     def _send(self, state: dict[str, object], registers: dict[str, Any]) -> None:
         with self.sessions_lock:

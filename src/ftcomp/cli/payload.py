@@ -1,0 +1,68 @@
+"""``ftcomp payload set``: write a calibration's tool mass and centre of gravity to the robot.
+
+``ftcomp payload set ur://HOST -c calibration.json [--mount X,Y,Z,ROLL,PITCH,YAW]``
+
+A UR controller's force mode, its protective stops and ``actual_TCP_force`` use the payload set
+on it (the pendant's payload wizard, or by hand). This writes the calibration's: the mass
+(weight / standard gravity) and the centre of gravity, taken from the sensor frame into the
+controller's TCP frame through the mount (``--mount``, as ``record`` had it), then from the tool
+flange through the TCP offset the controller reports, with ur_rtde's ``setPayload``. Prints what
+was set before and what is set now (as RTDE reports them). The tool's weight in the calibration
+includes the sensor's sensing end: the payload is everything beyond the sensor's fixed half.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from ftcomp.errors import ParameterError
+
+__all__ = ["register", "run"]
+
+
+def register(parser: argparse.ArgumentParser) -> None:
+    """Add the ``payload`` command's subcommand ``set`` and its arguments."""
+    from ftcomp.cli.hardware_options import parse_mount
+
+    parser.description = __doc__.split("\n\n", 1)[1].replace("``", "") if __doc__ else None
+    parser.formatter_class = argparse.RawDescriptionHelpFormatter
+    actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
+    set_parser = actions.add_parser(
+        "set", help="write the calibration's mass and centre of gravity to the controller"
+    )
+    set_parser.add_argument("robot", metavar="ur://HOST", help="the UR controller")
+    set_parser.add_argument(
+        "-c", "--calibration", required=True, help="the calibration file (ftcomp calibrate -o)"
+    )
+    set_parser.add_argument(
+        "--mount",
+        type=parse_mount,
+        default=None,
+        metavar="X,Y,Z,ROLL,PITCH,YAW",
+        help="the sensor frame in the robot's TCP frame [mm, deg] (default: the TCP frame)",
+    )
+    parser.set_defaults(handler=run)
+
+
+def _text(mass_kg: float, cog_m: tuple[float, float, float]) -> str:
+    cog = ", ".join(f"{v * 1e3:.2f}" for v in cog_m)
+    return f"{mass_kg:.4f} kg at [{cog}] mm from the flange"
+
+
+def run(args: argparse.Namespace) -> int:
+    """Write the payload; print before and after."""
+    from ftcomp.cli.hardware_options import mount_of
+    from ftcomp.hardware.registry import parse_uri
+    from ftcomp.hardware.ur import set_payload
+    from ftcomp.io.calibration_json import load_calibration
+
+    uri = parse_uri(args.robot)
+    if uri.scheme != "ur" or not uri.host:
+        raise ParameterError(f"{args.robot!r}: payload set writes to a UR controller: ur://HOST")
+    model = load_calibration(args.calibration).model
+    mount = mount_of(args)
+    cog_tcp = mount.p_tcp_sensor_m + mount.R_tcp_sensor @ model.center_of_gravity_m
+    before, after = set_payload(uri.host, model.mass_kg, cog_tcp, label=args.robot)
+    print(f"{args.robot}: payload was {_text(before.mass_kg, before.cog_flange_m)}")
+    print(f"{args.robot}: payload now {_text(after.mass_kg, after.cog_flange_m)}")
+    return 0
