@@ -1,5 +1,5 @@
 """The device table of docs/hardware.md is the registry's (:func:`device_table`), and the
-registry's declarations hold together: unique schemes per kind, unique face names, every
+registry's declarations hold together: one backend per scheme and kind, unique face names, every
 backend and face importable by its ``"module:attribute"``."""
 
 from __future__ import annotations
@@ -36,6 +36,10 @@ def test_every_declaration_names_a_module_that_has_it() -> None:
 
 def test_schemes_and_face_names_are_unique_per_kind() -> None:
     for kind in ("robot", "sensor"):
-        schemes = [d.scheme for d in devices(kind)]
-        assert len(schemes) == len(set(schemes))
+        # A scheme declared twice is one family reached two ways (robotiq://HOST and
+        # robotiq:///dev/ttyUSB0), through one backend and one extra.
+        backends = {(d.scheme, d.backend, d.extra) for d in devices(kind)}
+        assert len(backends) == len({d.scheme for d in devices(kind)})
+        uris = [d.uri for d in devices(kind)]
+        assert len(uris) == len(set(uris))
         assert all(d.kind == kind for d in twin_faces(kind).values())

@@ -139,6 +139,16 @@ class Device:
 
 _NOT_ON_A_TWIN: Final = "no twin face: a file, a fixed pose or the simulated cell itself"
 
+_FT300_FROZEN: Final = Fault(
+    "ft300-frozen", "the FT 300 repeats its last reading", "frozen_sample", 1.0
+)
+_FT300_OVERRANGE: Final = Fault(
+    "ft300-overrange",
+    "the FT 300 reads Fz = 310 N, beyond its rated 300 N",
+    "sensor fault: overrange",
+    0.1,
+)
+
 #: The devices ftcomp ships: robots, then sensors.
 BUILT_IN: Final[tuple[Device, ...]] = (
     Device(
@@ -289,6 +299,131 @@ BUILT_IN: Final[tuple[Device, ...]] = (
     ),
     Device(
         "sensor",
+        "robotiq",
+        "ftcomp.hardware.robotiq:open_sensor",
+        "robotiq://HOST",
+        "Robotiq FT 300 through the URCap's stream on a UR controller (TCP 63351)",
+        extra="robotiq",
+        tested="the twin's URCap stream (the line format as users' drivers read it); no "
+        "real controller",
+        twin=TwinFace(
+            "ft300-urcap",
+            "ftcomp.twin.robotiq_face:RobotiqUrcapFace",
+            faults=(
+                _FT300_FROZEN,
+                _FT300_OVERRANGE,
+                Fault(
+                    "urcap-garbled",
+                    "one line of the URCap's stream is cut short",
+                    "sensor fault: a line that is not six numbers",
+                    0.1,
+                ),
+                Fault(
+                    "urcap-disconnect",
+                    "the controller closes the URCap's stream",
+                    "sensor fault: the URCap stream ended",
+                    0.1,
+                ),
+                Fault(
+                    "network-loss",
+                    "the cell's network goes silent: no data from robot or sensor (a cable "
+                    "pulled between the host and the cell's switch; connections stay open)",
+                    "stale_sample",
+                    0.1,
+                ),
+            ),
+            rate_hz=100.0,
+            max_rate_hz=100.0,
+        ),
+    ),
+    Device(
+        "sensor",
+        "robotiq",
+        "ftcomp.hardware.robotiq:open_sensor",
+        "robotiq:///dev/ttyUSB0",
+        "Robotiq FT 300 on its serial line, Modbus RTU stream mode (pyserial)",
+        extra="robotiq",
+        tested="the twin's FT 300 on a pty through pyserial 3.5 (frames and CRC as Robotiq's "
+        "manual gives them); no real sensor",
+        twin=TwinFace(
+            "ft300-rtu",
+            "ftcomp.twin.robotiq_face:RobotiqRtuFace",
+            faults=(
+                _FT300_FROZEN,
+                _FT300_OVERRANGE,
+                Fault(
+                    "rtu-crc",
+                    "one stream frame arrives with a wrong CRC",
+                    "sensor fault: corrupted frame (bad CRC)",
+                    0.1,
+                ),
+                Fault(
+                    "rtu-disconnect",
+                    "the sensor's USB adapter is unplugged",
+                    "sensor fault: the serial device is gone",
+                    0.1,
+                ),
+            ),
+            rate_hz=100.0,
+            max_rate_hz=100.0,
+            requires=("serial",),
+        ),
+    ),
+    Device(
+        "sensor",
+        "bota",
+        "ftcomp.hardware.bota:open_sensor",
+        "bota:///dev/ttyUSB0",
+        "Bota Gen0 sensor (Rokubi) on its serial line, frames read by ftcomp (pyserial)",
+        extra="bota",
+        tested="the twin's Gen0 face on a pty through pyserial 3.5 (frames and CRC as Bota's "
+        "open serial drivers declare them); no real sensor",
+        twin=TwinFace(
+            "bota-gen0",
+            "ftcomp.twin.bota_face:BotaGen0Face",
+            faults=(
+                Fault(
+                    "bota-frozen",
+                    "the Bota sensor repeats its last reading (status clean)",
+                    "frozen_sample",
+                    1.0,
+                ),
+                Fault(
+                    "bota-crc",
+                    "one Gen0 frame arrives with a wrong CRC",
+                    "sensor fault: corrupted frame (bad CRC)",
+                    0.1,
+                ),
+                Fault(
+                    "bota-overrange",
+                    "the Bota sensor sets its status word's overrange bit",
+                    "sensor fault: status 0x0002 (overrange)",
+                    0.1,
+                ),
+                Fault(
+                    "bota-disconnect",
+                    "the Bota sensor's USB adapter is unplugged",
+                    "sensor fault: the serial device is gone",
+                    0.1,
+                ),
+            ),
+            rate_hz=800.0,
+            max_rate_hz=1245.0,
+            requires=("serial",),
+        ),
+    ),
+    Device(
+        "sensor",
+        "bota",
+        "ftcomp.hardware.bota:open_sensor",
+        "bota://dummy",
+        "Bota sensors through Bota's bota-driver: its simulated sensor (bota://dummy) or a "
+        "Gen A sensor over Ethernet (bota://HOST)",
+        extra="bota",
+        tested="bota-driver 1.1.16's simulated sensor (Bota_Dummy); no real sensor",
+    ),
+    Device(
+        "sensor",
         "replay",
         "ftcomp.hardware.replay:open_sensor",
         "replay://FILE",
@@ -338,7 +473,9 @@ def _registry() -> tuple[Device, ...]:
     faces: dict[tuple[str, str], Device] = {}
     for device in found:
         key = (device.kind, device.scheme)
-        if key in seen:
+        # One family may be declared once per way of reaching it (robotiq://HOST and
+        # robotiq:///dev/ttyUSB0, each with its twin face), through one backend.
+        if key in seen and (seen[key].backend, seen[key].extra) != (device.backend, device.extra):
             raise ParameterError(f"two {device.kind} devices declare the scheme {device.scheme}://")
         seen[key] = device
         if device.twin is not None:

@@ -1,0 +1,195 @@
+"""The ``bota://`` backend: Gen0 frames from the twin's face on a pty (a process of its own
+streaming a known, seeded sequence), and Bota's own client, ``bota-driver``, reading its
+built-in simulated sensor (``bota://dummy``)."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import struct
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numpy as np
+import pytest
+
+from ftcomp.errors import HardwareError, ParameterError
+from ftcomp.hardware.bota import GEN0_FRAME_SIZE, Gen0Decoder, crc16_x25, gen0_frame
+from ftcomp.hardware.registry import open_sensor
+
+pytest.importorskip("serial")
+
+SEED = 37
+SPREAD = np.array([30.0, 30.0, 60.0, 2.0, 2.0, 1.0])
+
+#: The stand-in: the twin's Gen0 face serving ``SPREAD * normal(seed)`` samples at 800 Hz for
+#: at most 20 s, once its reader has sent ``go`` on stdin; prints the face's URI, injects each
+#: other line of stdin as a fault.
+SERVE = """
+import sys, threading, time
+import numpy as np
+from ftcomp.hardware.protocols import WrenchSample
+from ftcomp.twin.bota_face import BotaGen0Face
+face = BotaGen0Face("", rate_hz=800.0, realtime=False)
+spread = np.array([30.0, 30.0, 60.0, 2.0, 2.0, 1.0])
+rng = np.random.default_rng(int(sys.argv[1]))
+go = threading.Event()
+print(face.uri(), flush=True)
+def commands():
+    for line in sys.stdin:
+        go.set() if line.strip() == "go" else face.inject(line.strip())
+threading.Thread(target=commands, daemon=True).start()
+go.wait(10.0)
+start = time.monotonic()
+k = 0
+while time.monotonic() - start < 20.0 and not face.pty.closed:
+    samples = []
+    while k < (time.monotonic() - start) * 800.0:
+        samples.append(WrenchSample(k * 1_250_000, spread * rng.standard_normal(6)))
+        k += 1
+    face.push(samples)
+    time.sleep(0.002)
+face.close()
+"""
+
+
+@contextmanager
+def serving() -> Iterator[tuple[str, subprocess.Popen[str]]]:
+    proc = subprocess.Popen(
+        [sys.executable, "-c", SERVE, str(SEED)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert proc.stdout is not None
+        uri = proc.stdout.readline().strip()
+        assert uri.startswith("bota:///dev/"), uri
+        yield uri, proc
+    finally:
+        proc.kill()
+        proc.wait(10)
+
+
+def say(proc: subprocess.Popen[str], line: str) -> None:
+    assert proc.stdin is not None
+    proc.stdin.write(line + "\n")
+    proc.stdin.flush()
+
+
+def sent(count: int) -> np.ndarray:
+    rng = np.random.default_rng(SEED)
+    return np.array([SPREAD * rng.standard_normal(6) for _ in range(count)])
+
+
+def as_float32(values: np.ndarray) -> np.ndarray:
+    return values.astype(np.float32).astype(float)
+
+
+def wait_readings(sensor: object, count: int, timeout_s: float = 10.0) -> list:
+    readings: list = []
+    deadline = time.monotonic() + timeout_s
+    while len(readings) < count and time.monotonic() < deadline:
+        readings += sensor.read_new()  # type: ignore[attr-defined]
+        time.sleep(0.01)
+    return readings
+
+
+def test_crc16_x25_matches_the_standard_check_value() -> None:
+    # The CRC catalogue's check value of CRC-16/IBM-SDLC (X-25) over "123456789".
+    assert crc16_x25(b"123456789") == 0x906E
+
+
+def test_a_gen0_frame_is_37_bytes_and_decodes_to_what_was_packed() -> None:
+    frame = gen0_frame(0b1, [1.5, -2.25, 3.0, 0.125, -0.5, 0.75], 123456, 31.5)
+    assert len(frame) == GEN0_FRAME_SIZE == 37 and frame[0] == 0xAA
+    assert struct.unpack_from("<H", frame, 1)[0] == 1
+    decoder = Gen0Decoder()
+    found = list(decoder.feed(b"\x00\xaa\x01" + frame + frame[:10]))
+    assert found == [(1, (1.5, -2.25, 3.0, 0.125, -0.5, 0.75), 123456, 31.5)]
+    bad = bytearray(frame)
+    bad[5] ^= 0x10
+    with pytest.raises(HardwareError, match=r"corrupted frame \(bad CRC\) after 2 frames"):
+        list(decoder.feed(frame[10:] + bytes(bad)))
+
+
+@pytest.mark.parametrize(
+    ("uri", "match"),
+    [
+        ("bota://", "give the serial device"),
+        ("bota:///dev/ttyUSB0?baud=0", "baud must be > 0"),
+        ("bota:///dev/ttyUSB0?rate=1", "unknown option 'rate'"),
+    ],
+)
+def test_bad_uris_are_one_line_naming_the_uri(uri: str, match: str) -> None:
+    with pytest.raises(ParameterError, match=match):
+        open_sensor(uri)
+
+
+def test_gen0_frames_from_the_twins_face_are_read_exactly_with_the_temperature() -> None:
+    with serving() as (uri, proc):
+        sensor = open_sensor(uri)
+        say(proc, "go")  # the stream starts once the port is open (its buffer flushed)
+        with sensor:
+            readings = wait_readings(sensor, 400)
+            temperature = sensor.temperature_C  # type: ignore[attr-defined]
+    assert len(readings) >= 400
+    got = np.array([r.wrench_sensor for r in readings])
+    # float32 on the wire: the values as sent, rounded to float32; none lost or reordered
+    # (the first reading may be any of the first frames: the port opened as they came).
+    first = int(np.argmin(np.abs(sent(4000) - got[0]).sum(axis=1)))
+    expected = as_float32(sent(first + len(got))[first:])
+    assert np.array_equal(got, expected)
+    assert temperature == 30.0
+
+
+@pytest.mark.parametrize(
+    ("fault", "says"),
+    [
+        ("bota-crc", "corrupted frame (bad CRC)"),
+        ("bota-overrange", "status 0x0002 (overrange)"),
+        ("bota-disconnect", "the serial device is gone"),
+    ],
+)
+def test_a_gen0_fault_is_a_stop_never_a_reading(fault: str, says: str) -> None:
+    with serving() as (uri, proc):
+        sensor = open_sensor(uri)
+        say(proc, "go")
+        with sensor:
+            before = wait_readings(sensor, 50)
+            say(proc, fault)
+            after: list = []
+            deadline = time.monotonic() + 5.0
+            with pytest.raises(HardwareError, match="sensor fault: " + re.escape(says)):
+                while time.monotonic() < deadline:
+                    after += sensor.read_new()
+                    sensor.read()
+                    time.sleep(0.005)
+    got = np.array([r.wrench_sensor for r in before + after])
+    first = int(np.argmin(np.abs(sent(4000) - got[0]).sum(axis=1)))
+    assert np.array_equal(got, as_float32(sent(first + len(got))[first:]))
+
+
+@pytest.mark.skipif(
+    importlib.util.find_spec("bota_driver") is None,
+    reason="bota-driver (Bota's binary client) has no wheel for this platform",
+)
+def test_bota_dummy_reads_the_vendor_drivers_simulated_sensor() -> None:
+    with open_sensor("bota://dummy") as sensor:
+        readings = wait_readings(sensor, 300)
+        temperature = sensor.temperature_C  # type: ignore[attr-defined]
+        acceleration = sensor.acceleration_m_s2  # type: ignore[attr-defined]
+    assert len(readings) >= 300
+    got = np.array([r.wrench_sensor for r in readings])
+    # bota-driver 1.1.16's Bota_Dummy: (1, 2, 3) N and (0.1, 0.2, 0.3) N*m with noise of about
+    # 0.1 N and 0.03 N*m per reading (seen), so the mean of n readings within 5 of its standard
+    # errors; 25 degC; gravity on its accelerometer.
+    mean, se = got.mean(axis=0), got.std(axis=0, ddof=1) / np.sqrt(len(got))
+    assert np.all(np.abs(mean - [1.0, 2.0, 3.0, 0.1, 0.2, 0.3]) <= 5 * se), (mean, se)
+    assert temperature == 25.0
+    assert np.linalg.norm(acceleration) == pytest.approx(9.81, abs=0.1)
+    stamps = [r.t_ns for r in readings]
+    assert stamps == sorted(stamps)
