@@ -116,6 +116,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--tries", type=int, default=50)
     parser.add_argument("--fault", choices=FAULTS, action="append")
+    parser.add_argument("--verbose", action="store_true", help="one line per try")
     args = parser.parse_args()
     failed = 0
     with tempfile.TemporaryDirectory() as tmp:
@@ -123,7 +124,10 @@ def main() -> int:
             ends: collections.Counter[str] = collections.Counter()
             t0 = time.monotonic()
             for k in range(args.tries):
-                ends[one_try(fault, k, Path(tmp))] += 1
+                end = one_try(fault, k, Path(tmp))
+                ends[end] += 1
+                if args.verbose:
+                    print(f"  {fault} try {k + 1}: {end}", flush=True)
             ok = ends.pop("ok", 0)
             failed += args.tries - ok
             others = "; ".join(f"{n}x {why}" for why, n in ends.most_common())

@@ -93,7 +93,10 @@ def test_import_bag_with_a_urdf_names_the_urdf_extra(tmp_path: Path, bag: Path) 
     route = ["--urdf", urdf, "--joint-states", "/joint_states"]
     done = lean(*args, "--sensor-frame", "ft_sensor", *route, "-o", tmp_path / "s.csv")
     assert done.returncode == 2, done.stderr
-    assert done.stderr == "error: reading a URDF needs pytransform3d: pip install 'ftcomp[urdf]'\n"
+    assert done.stderr == (
+        "error: reading a URDF needs pytransform3d: pip install -e '.[urdf]' (in the ftcomp "
+        "clone)\n"
+    )
 
 
 @pytest.mark.parametrize(
@@ -101,20 +104,22 @@ def test_import_bag_with_a_urdf_names_the_urdf_extra(tmp_path: Path, bag: Path) 
     [
         (
             ["demo", "--quick"],
-            "error: ftcomp demo needs MuJoCo and matplotlib: pip install 'ftcomp[demo]'",
+            "error: ftcomp demo needs MuJoCo and matplotlib: pip install -e '.[demo]' "
+            "(in the ftcomp clone)",
         ),
         (
             ["sim", "collect", "-o", "x.csv"],
-            "error: ftcomp sim collect needs MuJoCo: pip install 'ftcomp[sim]'",
+            "error: ftcomp sim collect needs MuJoCo: pip install -e '.[sim]' (in the ftcomp clone)",
         ),
         (
             ["sim", "place", "--surface", "sponge", "--control", "admittance", "--out", "run"],
-            "error: ftcomp sim place needs MuJoCo and matplotlib: pip install 'ftcomp[demo]'",
+            "error: ftcomp sim place needs MuJoCo and matplotlib: pip install -e '.[demo]' "
+            "(in the ftcomp clone)",
         ),
         (
             ["poses", "design", "--count", "3", "--robot", "sim://", "-o", "poses.csv"],
             "error: the simulated cell (ftcomp sim, sim://) needs MuJoCo: "
-            "pip install 'ftcomp[sim]'",
+            "pip install -e '.[sim]' (in the ftcomp clone)",
         ),
     ],
 )
@@ -144,7 +149,7 @@ for call, extra in ((lambda: open_robot("sim://"), "sim"),
     try:
         call()
     except MissingExtraError as exc:
-        assert f"pip install 'ftcomp[{extra}]'" in str(exc), exc
+        assert f"pip install -e '.[{extra}]' (in the ftcomp clone)" in str(exc), exc
     else:
         raise AssertionError("no MissingExtraError")
 """

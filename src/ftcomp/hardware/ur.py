@@ -51,6 +51,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
+from ftcomp.extras import install_hint
 from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
 from ftcomp.hardware.pacing import LatenessOfPacer, RateLimiter
 from ftcomp.hardware.protocols import ClockName, PoseSample, Robot
@@ -162,7 +163,7 @@ class URRobot(LatenessOfPacer):
         try:
             import rtde_receive
         except ImportError:
-            raise ParameterError("ur:// needs ur_rtde: pip install 'ftcomp[ur]'") from None
+            raise ParameterError(f"ur:// needs ur_rtde: {install_hint('ur')}") from None
         probe = ("timestamp", "actual_TCP_pose")
         self.version = probe_rtde(
             self.host, probe, timeout_s=self.connect_timeout_s, label=repr(self.uri.text)
@@ -606,7 +607,7 @@ def set_payload(
         import rtde_control
         import rtde_receive
     except ImportError:
-        raise ParameterError("ur:// needs ur_rtde: pip install -e '.[ur]'") from None
+        raise ParameterError(f"ur:// needs ur_rtde: {install_hint('ur')}") from None
     try:
         receive = rtde_receive.RTDEReceiveInterface(host, 125.0, ["payload", "payload_cog"])
     except RuntimeError as exc:
