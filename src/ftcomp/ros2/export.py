@@ -27,10 +27,11 @@ parameters, and the comment above it lists what admittance_controller needs besi
 
 Numbers are written with ``repr`` (shortest round trip) and always as doubles (``1.0e-05``, never
 ``1e-05``, which a YAML 1.1 parser reads as a string), so the YAML holds the calibration exactly.
-Names are checked against ROS's rules (:func:`check_ros_name`: frames and topics are tokens of
-letters, digits and ``_`` not starting with a digit, joined by ``/``; controller names are one
-such token) and written double-quoted, keys too, so that no name reads back as anything but a
-string (``yes``, ``null``, ``on`` are valid ROS names and YAML 1.1 booleans or nulls).
+Names are checked (:func:`check_ros_name`: frames and the sensor name as tf2 checks a frame id,
+any text but the empty one and one starting with ``/``; controller names by ROS's rule for a
+node, letters, digits and ``_`` not starting with a digit) and written double-quoted, keys too,
+so that no name reads back as anything but a string (``yes``, ``null``, ``on`` are valid names
+and YAML 1.1 booleans or nulls).
 """
 
 from __future__ import annotations
@@ -107,24 +108,27 @@ def _list(values: Iterable[float]) -> str:
 
 _TOKEN = r"[A-Za-z_][A-Za-z0-9_]*"
 _PATTERNS = {
+    # tf2's own rule (BufferCore::validateFrameId): a frame id is any string but the empty one
+    # and one starting with '/'; it need not be a ROS name (0x1F, sensor-1 are tf2 frames).
     "frame": (
-        re.compile(rf"{_TOKEN}(/{_TOKEN})*"),
-        "tokens of letters, digits and _ not "
-        "starting with a digit, joined by '/', e.g. base_link or ur/tool0",
+        re.compile(r"[^/].*", re.DOTALL),
+        "tf2 refuses an empty frame id and one starting with '/'",
     ),
     "node": (re.compile(_TOKEN), "letters, digits and _, not starting with a digit"),
 }
 
 
 def check_ros_name(kind: str, value: str, rule: str = "frame") -> str:
-    """``value`` when it is a valid ROS name of ``rule`` (``frame`` or ``node``).
+    """``value`` when it is a valid name of ``rule``: ``frame``, a tf2 frame id (any text but
+    the empty one and one starting with ``/``, as tf2 checks); ``node``, a ROS node name.
 
     Raises:
         ParameterError: naming ``kind``, the value and the rule.
     """
     pattern, words = _PATTERNS[rule]
     if pattern.fullmatch(value) is None:
-        raise ParameterError(f"{kind} {value!r}: not a valid ROS name ({words})")
+        what = "tf2 frame id" if rule == "frame" else "ROS name"
+        raise ParameterError(f"{kind} {value!r}: not a valid {what} ({words})")
     return value
 
 
