@@ -64,6 +64,12 @@ BAD_INPUTS = [
         r"missing column 'fz' \(did you mean 'fzz'\?\)",
     ),
     (
+        # 't' is the time column: never offered for 'tz'; the wrench's columns are named.
+        "pose,t,alpha_deg,beta_deg,gamma_deg,fx,fy,fz,tx,ty\n1,0,0,0,0,0,0,0,0,0\n",
+        r"missing column 'tz': the wrench is the six columns fx,fy,fz,tx,ty,tz \[N, N\*m\] in "
+        r"the sensor frame \(found fx,fy,fz,tx,ty\)$",
+    ),
+    (
         GOOD_HEADER.replace("fy", "Fy") + "\n" + "\n".join(GOOD_ROWS),
         r"missing column 'fy' \(found 'Fy': column names are case-sensitive\)",
     ),

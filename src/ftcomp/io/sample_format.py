@@ -164,7 +164,15 @@ def check_header(
         raise InputFileError(f"{where}: column {duplicates[0]!r} appears more than once")
     for name in WRENCH_COLUMNS:
         if name not in names:
-            raise InputFileError(f"{where}: missing column {name!r}{_suggest(name, names)}")
+            # Suggest only a column ftcomp does not read otherwise ('t' is a time, not 'tz').
+            known = {*WRENCH_COLUMNS, *(c for cs in ENCODING_COLUMNS.values() for c in cs)}
+            others = [n for n in names if n not in known | {"t", "t_ns", "pose"}]
+            found = [c for c in WRENCH_COLUMNS if c in names]
+            raise InputFileError(
+                f"{where}: missing column {name!r}{_suggest(name, others)}: the wrench is the "
+                f"six columns {','.join(WRENCH_COLUMNS)} [N, N*m] in the sensor frame"
+                + (f" (found {','.join(found)})" if found else "")
+            )
     encoding = _find_encoding(names, where)
     numeric = (*WRENCH_COLUMNS, *ENCODING_COLUMNS[encoding], *(("t",) if "t" in names else ()))
     return SampleLayout(source, names, encoding, numeric, force_range_N, torque_range_Nm)
