@@ -60,3 +60,13 @@ def test_a_field_over_the_csv_limit_is_an_input_error_naming_the_file(tmp_path: 
     path.write_text("qx,qy,qz,qw,note\n0,0,0,1," + "x" * (129 * 1024) + "\n")
     with pytest.raises(InputFileError, match=r"poses\.csv: not a readable pose CSV"):
         read_pose_file(path)
+
+
+def test_a_missing_pose_file_named_like_paper_points_to_the_papers_poses(
+    tmp_path, monkeypatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(InputFileError, match=r"^papr: no such pose file \(did you mean 'paper'"):
+        read_pose_file("papr")
+    with pytest.raises(InputFileError, match=r"^poses\.csv: no such pose file$"):
+        read_pose_file("poses.csv")

@@ -9,6 +9,7 @@ sample CSV is also a pose file.
 from __future__ import annotations
 
 import csv
+import difflib
 import os
 from pathlib import Path
 from typing import Final
@@ -19,7 +20,10 @@ from ftcomp.errors import FtcompError, InputFileError
 from ftcomp.frames import ENCODING_COLUMNS, OrientationEncoding, rotation_from_encoding
 from ftcomp.samples import PoseList
 
-__all__ = ["read_pose_file"]
+__all__ = ["PAPER_POSES", "read_pose_file"]
+
+#: The name commands that read a pose file also take for the paper's nine poses.
+PAPER_POSES: Final = "paper"
 
 #: Optional position columns of a pose file: the sensor origin, base frame [m].
 _POSITION_COLUMNS: Final = ("x_m", "y_m", "z_m")
@@ -44,6 +48,11 @@ def read_pose_file(path: str | os.PathLike[str]) -> PoseList:
     source = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8-sig")
+    except FileNotFoundError as exc:
+        hint = ""
+        if difflib.get_close_matches(Path(path).name.lower(), [PAPER_POSES], n=1, cutoff=0.6):
+            hint = f" (did you mean {PAPER_POSES!r}, the paper's nine poses?)"
+        raise InputFileError(f"{source}: no such pose file{hint}") from exc
     except (OSError, UnicodeDecodeError) as exc:
         raise InputFileError(f"{source}: cannot read the pose file: {exc}") from exc
     try:  # a cell over csv's field limit (128 KiB) is a bad file, not a crash
