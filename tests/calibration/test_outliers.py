@@ -153,3 +153,26 @@ def test_four_poses_still_name_a_corrupt_reading(tmp_path) -> None:
     bad.write_text("\n".join(lines).replace("3.1736", "31736") + "\n")  # pose 3, fz
     result = calibrate(read_samples(bad), method="paper")
     assert any(w.startswith("OUTLIER POSE(S) 3 (fz: ") for w in result.warnings)
+
+
+def test_torques_in_newton_millimetres_are_named_as_the_inputs_units(tmp_path, capsys) -> None:
+    from ftcomp.cli import main
+
+    samples = read_samples(PAPER_CSV)
+    text = PAPER_CSV.read_text().splitlines()
+    header = text[0].split(",")
+    torque = [header.index(c) for c in ("tx", "ty", "tz")]
+    rows = []
+    for line in text[1:]:
+        cells = line.split(",")
+        for j in torque:
+            cells[j] = repr(float(cells[j]) * 1000.0)  # N*m -> N*mm
+        rows.append(",".join(cells))
+    path, out = tmp_path / "nmm.csv", tmp_path / "c35.json"
+    path.write_text("\n".join([text[0], *rows]) + "\n")
+    assert len(read_samples(path)) == len(samples)
+    assert main(["calibrate", str(path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"error: {path}: the identified centre of gravity is")
+    assert "N*mm" in err and "\n" not in err
+    assert not out.exists()

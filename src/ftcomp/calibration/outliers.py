@@ -34,6 +34,7 @@ from ftcomp.errors import IdentificationError
 
 __all__ = [
     "OUTLIER_THRESHOLD",
+    "PLAUSIBLE_COG_M",
     "check_fit",
     "check_readings",
     "outlier_threshold",
@@ -73,6 +74,12 @@ def check_readings(
         )
 
 
+#: Farthest a tool's centre of gravity may lie from the sensor [m]: beyond the reach of the
+#: largest collaborative arms (a UR10e reaches 1.3 m). Torques in N*mm read as N*m put it 1000x
+#: too far, tens of metres for a real tool.
+PLAUSIBLE_COG_M = 2.0
+
+
 def check_fit(theta: NDArray[np.float64], covariance: NDArray[np.float64], source: str) -> None:
     """Raise if an identified ``theta = [a, F0, M0, P]`` is not finite or absurd: gravity or
     force bias beyond :data:`PLAUSIBLE_FORCE_N`, torque bias beyond :data:`PLAUSIBLE_TORQUE_NM`.
@@ -96,6 +103,14 @@ def check_fit(theta: NDArray[np.float64], covariance: NDArray[np.float64], sourc
         raise IdentificationError(
             f"{source}: absurd fit (torque bias up to {torque_bias:.3g} N*m, beyond "
             f"{PLAUSIBLE_TORQUE_NM:g} N*m); check the readings"
+        )
+    cog = float(np.linalg.norm(theta[9:12]))
+    if cog > PLAUSIBLE_COG_M:
+        milli = f" ({cog / 1000.0:.3g} m if the torques were N*mm)" if cog > 100.0 else ""
+        raise IdentificationError(
+            f"{source}: the identified centre of gravity is {cog:.4g} m from the sensor, beyond "
+            f"any tool on an arm ({PLAUSIBLE_COG_M:g} m){milli}: are the torques tx, ty, tz in "
+            "N*m? ftcomp reads forces in N and torques in N*m (divide torques in N*mm by 1000)"
         )
     a = theta[0:3]
     if not a[2] < 0.0 or abs(a[1]) >= weight:  # tilted 90 deg or more, or no weight at all
