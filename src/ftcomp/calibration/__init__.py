@@ -13,7 +13,8 @@ them, :mod:`ftcomp.compensation` applies them.
   :mod:`.extended`; :mod:`.rebias`: the bias alone from still readings.
 - :mod:`.dynamic`: the tool's inertia tensor from a fast excitation trajectory.
 - :mod:`.stochastic`: the bias as a stochastic process in time (``--bias-drift stochastic``);
-  :mod:`.sensor_map`: a general linear force/torque map regularised toward the paper's model.
+  :mod:`.sensor_map`: a general linear force/torque map regularised toward the paper's model;
+  :mod:`.temperature`: a bias that follows the sensor's temperature, chosen by held-out error.
 - :mod:`.design`: D-optimal calibration poses, :mod:`.reachable_design` on an arm that does not
   reach every orientation; :mod:`.collect`: static readings at a list of poses from any robot
   and sensor; :mod:`.still`: the still segments of a recording in motion.
@@ -39,4 +40,5 @@ __all__ = [
     "sensor_map",
     "still",
     "stochastic",
+    "temperature",
 ]
