@@ -29,7 +29,7 @@ import tempfile
 import threading
 import time
 from collections import OrderedDict, deque
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, Any, Self
@@ -51,6 +51,7 @@ from ftcomp.ros2.rclpy_runtime import (
     WrenchStamped,
     check_domain,
     qos_profile,
+    received_ns,
     stamp_ns,
     twist_stamped,
     wrench_of,
@@ -261,23 +262,31 @@ class JointStatePose:
         self._lock = threading.Lock()
         self._q = np.full(len(chain.joint_names), np.nan)
         self._index = {name: k for k, name in enumerate(chain.joint_names)}
-        #: Arrival of the latest message naming every joint of the chain [ns, monotonic].
+        #: Reception of the latest message naming every joint of the chain [ns, system clock].
         self.t_ns: int | None = None
         self.arrived = threading.Event()
+        self._latest: tuple[int, NDArray[np.float64], NDArray[np.float64]] | None = None
 
-    def on_joint_state(self, msg: JointState) -> None:
-        """The subscription's callback: keep the chain's joints from ``msg``."""
-        now = time.monotonic_ns()
+    def on_joint_state(self, msg: JointState, info: Mapping[str, Any]) -> None:
+        """The subscription's callback: keep the chain's joints from ``msg``, the sensor's pose
+        they give (computed here, once per message) and when it was received (the
+        middleware's time: a backlog of callbacks does not age it)."""
+        now = received_ns(info)
         with self._lock:
             for name, position in zip(msg.name, msg.position, strict=False):
                 k = self._index.get(str(name))
                 if k is not None:
                     self._q[k] = position
             complete = bool(np.isfinite(self._q).all())
-            if complete:
-                self.t_ns = now
-        if complete:
-            self.arrived.set()
+            q = self._q.copy()
+        if not complete:
+            return
+        T = self.chain.pose_and_jacobian(q)[0]
+        p, R = T[:3, 3].copy(), T[:3, :3].copy()
+        with self._lock:
+            self._latest = (now, p, R)
+            self.t_ns = now
+        self.arrived.set()
 
     def missing(self) -> list[str]:
         """The chain's joints no message has given yet."""
@@ -285,13 +294,13 @@ class JointStatePose:
             return [n for n, k in self._index.items() if not math.isfinite(self._q[k])]
 
     def pose(self) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
-        """``(arrival [ns], p_base_sensor [m], R_base_sensor)`` of the latest joint states."""
+        """``(reception [ns, system clock], p_base_sensor [m], R_base_sensor)`` of the latest
+        joint states."""
         with self._lock:
-            q, t = self._q.copy(), self.t_ns
-        if t is None:
+            latest = self._latest
+        if latest is None:
             raise HardwareError(f"no joint states on {self.topic} yet")
-        T = self.chain.pose_and_jacobian(q)[0]
-        return t, T[:3, 3].copy(), T[:3, :3].copy()
+        return latest
 
 
 class Ros2PoseSource:
@@ -388,13 +397,13 @@ class Ros2PoseSource:
         if self._pose is None:
             raise HardwareError("ros2:// pose source not started (use a with block)")
         t, p, R = self._pose.pose()
-        now = time.monotonic_ns()
-        if now - t > self.stale_s * 1e9:
+        age = time.time_ns() - t
+        if age > self.stale_s * 1e9:
             raise HardwareError(
                 f"ros2:// pose: the joint states on {self.joint_states_topic} are "
-                f"{(now - t) / 1e9:.3f} s old (stale after {self.stale_s:g} s)"
+                f"{age / 1e9:.3f} s old (stale after {self.stale_s:g} s)"
             )
-        return PoseSample(now, p, R)
+        return PoseSample(time.monotonic_ns(), p, R)
 
     def move_pose(
         self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64], duration_s: float

@@ -44,6 +44,7 @@ from ftcomp.ros2.live import JointStatePose, robot_description, urdf_chain, wait
 from ftcomp.ros2.node_config import NodeConfig
 from ftcomp.ros2.rclpy_runtime import (
     DEFAULT_QOS,
+    STREAM_QOS,
     DiagnosticArray,
     DiagnosticStatus,
     JointState,
@@ -53,6 +54,7 @@ from ftcomp.ros2.rclpy_runtime import (
     Trigger,
     WrenchStamped,
     qos_profile,
+    received_ns,
     wrench_of,
 )
 from ftcomp.ros2.tf import clean_frame
@@ -115,6 +117,7 @@ class CompensationNode:
         self._collect: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]]
         self._collect = []
         self._collecting = False
+        self._collect_until: tuple[int, threading.Event] | None = None
         self._pub_sensor: Any = None
         self._pub_base: Any = None
         self._pub_diag: Any = None
@@ -180,10 +183,10 @@ class CompensationNode:
                 f"no joint states naming {', '.join(self._pose.missing())} on "
                 f"{config.joint_states} within {config.timeout_s:g} s"
             )
-        self._pub_sensor = node.create_publisher(WrenchStamped, "~/wrench_compensated", DEFAULT_QOS)
-        self._pub_base = node.create_publisher(WrenchStamped, "~/wrench_contact_base", DEFAULT_QOS)
+        self._pub_sensor = node.create_publisher(WrenchStamped, "~/wrench_compensated", STREAM_QOS)
+        self._pub_base = node.create_publisher(WrenchStamped, "~/wrench_contact_base", STREAM_QOS)
         self._pub_diag = node.create_publisher(DiagnosticArray, "/diagnostics", DEFAULT_QOS)
-        services = ReentrantCallbackGroup()  # a rebias reads for seconds: beside the readings
+        services = ReentrantCallbackGroup()  # a rebias reads for seconds, beside the readings
         node.create_service(Trigger, "~/rebias", self._on_rebias, callback_group=services)
         node.create_service(
             Trigger, "~/reload_calibration", self._on_reload, callback_group=services
@@ -204,7 +207,7 @@ class CompensationNode:
         return calibration
 
     # ----------------------------------------------------------------- the readings
-    def _on_wrench(self, msg: WrenchStamped) -> None:
+    def _on_wrench(self, msg: WrenchStamped, info: Mapping[str, Any]) -> None:
         config, pose = self.config, self._pose
         assert config is not None and pose is not None
         wrench = wrench_of(msg)
@@ -215,22 +218,23 @@ class CompensationNode:
         if not all(math.isfinite(v) for v in wrench):
             self._drop(f"a non-finite wrench on {config.wrench_topic}")
             return
-        now = time.monotonic_ns()
+        received = received_ns(info)
         try:
             t_pose, p, R = pose.pose()
         except HardwareError as exc:
             self._drop(str(exc))
             return
-        if now - t_pose > config.stale_s * 1e9:
+        if received - t_pose > config.stale_s * 1e9:  # both as the middleware received them
             self._drop(
-                f"joint states on {config.joint_states} {(now - t_pose) / 1e9:.3f} s old "
-                f"(stale after {config.stale_s:g} s)"
+                f"joint states on {config.joint_states} {(received - t_pose) / 1e9:.3f} s older "
+                f"than the reading (stale after {config.stale_s:g} s)"
             )
             return
         with self._lock:
             compensator, R_T = self._compensator, self._R_rec_sensor_T
             if self._collecting:
                 self._collect.append((wrench, R, p))
+        self._end_collection(received)
         assert compensator is not None
         R_feed = R if R_T is None else R @ R_T  # a mount-identified calibration's frame
         contact = compensator.compensate(wrench, R_feed)
@@ -250,6 +254,15 @@ class CompensationNode:
         if back:
             self._say(DiagnosticStatus.OK, "compensating")
 
+    def _end_collection(self, now_ns: int, grace_ns: int = 0) -> None:
+        """End a rebias's collection whose time is up (``grace_ns`` later)."""
+        with self._lock:
+            until = self._collect_until
+            if until is None or now_ns < until[0] + grace_ns:
+                return
+            self._collect_until = None
+        until[1].set()
+
     def _drop(self, why: str) -> None:
         message = why + ": nothing published"
         with self._lock:
@@ -267,6 +280,7 @@ class CompensationNode:
         self._publish_status()
 
     def _publish_status(self) -> None:
+        self._end_collection(time.time_ns(), grace_ns=1_000_000_000)  # readings stopped
         if self._pub_diag is None:
             return
         with self._lock:
@@ -287,11 +301,15 @@ class CompensationNode:
 
     # ----------------------------------------------------------------- services
     def _on_rebias(self, _request: Any, response: Any) -> Any:
+        """Collect ``rebias_s`` of readings, then re-estimate the bias (in a callback group of
+        its own: the executor's other thread goes on compensating meanwhile)."""
         config = self.config
         assert config is not None
+        done = threading.Event()
         with self._lock:
             self._collect, self._collecting = [], True
-        time.sleep(config.rebias_s)
+            self._collect_until = (time.time_ns() + round(config.rebias_s * 1e9), done)
+        done.wait(config.rebias_s + 5.0)
         with self._lock:
             got, self._collecting = self._collect, False
             calibration, R_T = self._calibration, self._R_rec_sensor_T

@@ -23,6 +23,8 @@ from __future__ import annotations
 import contextlib
 import os
 import threading
+import time
+from collections.abc import Mapping
 from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, Any
@@ -67,6 +69,7 @@ __all__ = [
     "DEFAULT_QOS",
     "DESCRIPTION_QOS",
     "LOOPBACK_PROFILE_XML",
+    "STREAM_QOS",
     "DiagnosticArray",
     "DiagnosticStatus",
     "JointState",
@@ -80,6 +83,7 @@ __all__ = [
     "check_domain",
     "loopback_environment",
     "qos_profile",
+    "received_ns",
     "stamp_msg",
     "stamp_ns",
     "twist_stamped",
@@ -114,6 +118,9 @@ LOOPBACK_PROFILE_XML = """<?xml version="1.0" encoding="UTF-8" ?>
 
 #: rclcpp's default publisher QoS: reliable, keep last 10, volatile.
 DEFAULT_QOS = QoSProfile(depth=10)
+#: The node's outputs at a sensor's rate: reliable, volatile, keep last 100 (100 ms at 1 kHz
+#: for a subscriber to acknowledge before the oldest is overwritten).
+STREAM_QOS = QoSProfile(depth=100)
 #: robot_state_publisher's ``/robot_description``: reliable, transient local, keep last 1.
 DESCRIPTION_QOS = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
@@ -160,6 +167,13 @@ def qos_profile(kind: str, depth: int) -> QoSProfile:
         reliability=reliability,
         durability=DurabilityPolicy.VOLATILE,
     )
+
+
+def received_ns(info: Mapping[str, Any]) -> int:
+    """When the middleware received a message [ns, system clock], from the ``MessageInfo`` a
+    two-argument subscription callback gets (now, where the middleware gives none)."""
+    t = int(info.get("received_timestamp") or 0)
+    return t if t > 0 else time.time_ns()
 
 
 def stamp_ns(stamp: Time) -> int:
