@@ -13,6 +13,9 @@ as robot_state_publisher does; with ``--still``, the tool at rest with the bias 
 WrenchStamped on TOPIC until COUNT messages or SECONDS passed; writes
 ``[[stamp_ns, frame_id, fx, ..., tz], ...]``.
 
+``python rclpy_peer.py robot SECONDS OUT.json``: node ``servo_robot``, a Cartesian arm
+(:data:`CARTESIAN_URDF`) integrating TwistStamped into joint states (:func:`robot`).
+
 ``python rclpy_peer.py rebias OUT.json``: node ``client`` calling ``/ftcomp/rebias``
 (std_srvs/Trigger), writing ``[success, message]``.
 
@@ -22,6 +25,7 @@ The environment (the test's) pins them to loopback and sets ROS_DOMAIN_ID.
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 
@@ -159,6 +163,78 @@ def rebias(out: str) -> None:
     node.destroy_node()
 
 
+#: A Cartesian arm: x, y, z slides along the base axes, then yaw, pitch, roll (R = Rz Ry Rx),
+#: then the tool: a twist maps to joint rates without inverse kinematics.
+CARTESIAN_URDF = """<?xml version="1.0"?>
+<robot name="cartesian">
+  <link name="base"/><link name="sx"/><link name="sy"/><link name="sz"/>
+  <link name="ryaw"/><link name="rpitch"/><link name="tool"/>
+  <joint name="x" type="prismatic"><parent link="base"/><child link="sx"/>
+    <axis xyz="1 0 0"/><limit lower="-2" upper="2" effort="9" velocity="3"/></joint>
+  <joint name="y" type="prismatic"><parent link="sx"/><child link="sy"/>
+    <axis xyz="0 1 0"/><limit lower="-2" upper="2" effort="9" velocity="3"/></joint>
+  <joint name="z" type="prismatic"><parent link="sy"/><child link="sz"/>
+    <axis xyz="0 0 1"/><limit lower="-2" upper="2" effort="9" velocity="3"/></joint>
+  <joint name="yaw" type="revolute"><parent link="sz"/><child link="ryaw"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="9" velocity="3"/></joint>
+  <joint name="pitch" type="revolute"><parent link="ryaw"/><child link="rpitch"/>
+    <axis xyz="0 1 0"/><limit lower="-1.5" upper="1.5" effort="9" velocity="3"/></joint>
+  <joint name="roll" type="revolute"><parent link="rpitch"/><child link="tool"/>
+    <axis xyz="1 0 0"/><limit lower="-3" upper="3" effort="9" velocity="3"/></joint>
+</robot>
+"""
+
+
+def robot(seconds: float, out: str) -> None:
+    """Node ``servo_robot``: integrates ``/servo_node/delta_twist_cmds`` (TwistStamped, base
+    frame, MoveIt Servo's convention) into the Cartesian arm's pose at 200 Hz, a twist older
+    than 0.1 s counting as zero (Servo's command time-out), and publishes ``/joint_states``.
+    Ends after SECONDS or when ``OUT.json.stop`` exists, writing ``{"p": [...], "R": [...],
+    "last_twist": [...], "twists": N}``."""
+    from geometry_msgs.msg import TwistStamped
+
+    node = Node("servo_robot")
+    reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    joints = node.create_publisher(JointState, "/joint_states", reliable)
+    latest: list[object] = [np.zeros(6), 0.0, 0]
+
+    def on_twist(msg: TwistStamped) -> None:
+        v, w = msg.twist.linear, msg.twist.angular
+        latest[0] = np.array([v.x, v.y, v.z, w.x, w.y, w.z])
+        latest[1] = time.monotonic()
+        latest[2] = int(latest[2]) + 1  # type: ignore[call-overload]
+
+    node.create_subscription(TwistStamped, "/servo_node/delta_twist_cmds", on_twist, reliable)
+    p = np.array([0.4, 0.0, 0.3])
+    R = Rotation.from_euler("ZYX", [0.2, 0.1, np.pi - 0.05])
+    end = time.monotonic() + seconds
+    last = time.monotonic()
+    stop = out + ".stop"
+    while time.monotonic() < end and not os.path.exists(stop):
+        rclpy.spin_once(node, timeout_sec=0.005)
+        now = time.monotonic()
+        dt, last = now - last, now
+        twist = latest[0] if now - float(latest[1]) < 0.1 else np.zeros(6)  # type: ignore[arg-type]
+        p = p + np.asarray(twist)[:3] * dt
+        R = Rotation.from_rotvec(np.asarray(twist)[3:] * dt) * R
+        yaw, pitch, roll = R.as_euler("ZYX")
+        js = JointState(name=["x", "y", "z", "yaw", "pitch", "roll"])
+        js.position = [*p.tolist(), float(yaw), float(pitch), float(roll)]
+        _stamp(js.header.stamp, time.time_ns())
+        joints.publish(js)
+    with open(out, "w", encoding="utf-8") as handle:
+        json.dump(
+            {
+                "p": p.tolist(),
+                "R": R.as_matrix().tolist(),
+                "last_twist": np.asarray(latest[0]).tolist(),
+                "twists": latest[2],
+            },
+            handle,
+        )
+    node.destroy_node()
+
+
 if __name__ == "__main__":
     rclpy.init()
     try:
@@ -173,6 +249,8 @@ if __name__ == "__main__":
                 "--still" in flags,
                 "--nan" in flags,
             )
+        elif mode == "robot":
+            robot(float(sys.argv[2]), sys.argv[3])
         elif mode == "subscribe":
             subscribe(sys.argv[2], int(sys.argv[3]), float(sys.argv[4]), sys.argv[5])
         else:

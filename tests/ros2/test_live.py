@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import json
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -180,3 +181,65 @@ def test_ftcomp_stream_logs_the_contact_wrench_from_ros2_topics(
     # writes 6 decimals or so: 1e-6).
     k = np.round((contact_logged[:, 0] - contact(0)[0]) / 0.001)
     np.testing.assert_allclose(contact_logged, np.array([contact(int(i)) for i in k]), atol=1e-6)
+
+
+def test_the_servo_robot_commands_twists_a_robot_node_integrates_and_stops_on_exit(
+    ros2_graph: int, tmp_path: Path
+) -> None:
+    """``ros2://...&twist_topic=`` through ``run_loop`` against an rclpy "robot" node that
+    integrates TwistStamped into joint states (a Cartesian arm): the arm moves as commanded,
+    the pose read back through JointState + URDF is the robot node's own, and leaving the loop
+    sends a zero twist. Not yet the compliant placement on the simulated cell (docs/ros2.md)."""
+    from rclpy_peer import CARTESIAN_URDF
+
+    urdf, out = tmp_path / "cartesian.urdf", tmp_path / "robot.json"
+    urdf.write_text(CARTESIAN_URDF, encoding="utf-8")
+    robot_node = peer("robot", 150, out)
+    v = np.array([0.05, 0.0, -0.02, 0.0, 0.0, 0.1])  # [m/s, rad/s], base frame
+    try:
+        robot = open_robot(
+            f"ros2:///?base_frame=base&tcp_frame=tool&urdf={urdf}&rate_hz=100"
+            f"&twist_topic=/servo_node/delta_twist_cmds{WAIT}&stale_s=5"
+        )
+        with robot:
+            start = robot.pose()
+            n = [0]
+
+            def step(_reading: object) -> np.ndarray | None:
+                n[0] += 1
+                return v if n[0] <= 100 else None  # about 1 s at 100 Hz
+
+            class _Still:  # the loop needs a sensor: a reading that never changes
+                def read(self) -> object:
+                    from ftcomp.hardware.protocols import WrenchSample
+
+                    return WrenchSample(robot.now_ns(), np.zeros(6))
+
+                def read_new(self) -> list[object]:
+                    return [self.read()]
+
+            t0 = time.monotonic()
+            run_loop(ControlCycle(robot, _Still()), step)  # type: ignore[arg-type]
+            moved_s = time.monotonic() - t0
+            time.sleep(0.5)  # the zero twist and the last joint states arrive
+            end = robot.pose()
+        Path(f"{out}.stop").write_text("")
+        robot_node.wait(timeout=60)
+    finally:
+        stop(robot_node)
+    state = json.loads(out.read_text())
+    assert state["last_twist"] == [0.0] * 6  # leaving the loop sent a zero twist
+    assert state["twists"] >= 50
+    # The pose through JointState + URDF is the robot node's own (prismatic sums: exact).
+    np.testing.assert_allclose(end.p_base_tcp, state["p"], atol=1e-12)
+    np.testing.assert_allclose(end.R_base_tcp, state["R"], atol=1e-9)
+    travel = end.p_base_tcp - start.p_base_tcp
+    # It moved along v, for about the loop's time: the twists stop within the robot node's
+    # 0.1 s time-out of the last, and on a loaded host cycles run late (hence 40 %).
+    direction = v[:3] / np.linalg.norm(v[:3])
+    np.testing.assert_allclose(travel / np.linalg.norm(travel), direction, atol=1e-6)
+    assert 0.6 * np.linalg.norm(v[:3]) * moved_s < np.linalg.norm(travel)
+    assert np.linalg.norm(travel) < 1.4 * np.linalg.norm(v[:3]) * moved_s + 0.1 * 0.054
+    # The rotation was about base z only.
+    R_delta = end.R_base_tcp @ start.R_base_tcp.T
+    np.testing.assert_allclose(R_delta[2], [0.0, 0.0, 1.0], atol=1e-6)

@@ -234,8 +234,8 @@ BUILT_IN: Final[tuple[Device, ...]] = (
         "an arm in a ROS 2 graph: its pose from JointState and the URDF, driven by "
         "TwistStamped on a servo topic (rclpy; docs/ros2.md)",
         extra="ros2",
-        tested="rclpy nodes on loopback (joint states, a latched /robot_description); the "
-        "TwistStamped path not yet against a robot node; no ROS 2 driver of a real arm",
+        tested="rclpy nodes on loopback: joint states, a latched /robot_description, a robot "
+        "node integrating the twists (not yet a compliant placement); no real arm's driver",
     ),
     Device(
         "sensor",
