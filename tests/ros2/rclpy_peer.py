@@ -1,13 +1,15 @@
 """ROS 2 nodes for the live tests, each in its own process, written with rclpy alone.
 
-``python rclpy_peer.py publish SECONDS [FRAME] [--description] [--still] [--nan]``: node
+``python rclpy_peer.py publish SECONDS [FRAME] [--description] [--still] [--nan]
+[--joints-s=S]``: node
 ``sensor_driver``
 publishing ``/ft_raw`` (WrenchStamped, reliable, 200 Hz; reading k is
 ``MODEL.predict(R_BASE_SENSOR) + contact(k)`` stamped ``EPOCH_NS + k * 5 ms`` in FRAME, default
 ``ft_sensor``) and ``/joint_states`` (JointState, 100 Hz, :data:`Q` on the two joints of
 :data:`URDF`); with ``--description``, also ``/robot_description`` latched (transient local),
 as robot_state_publisher does; with ``--still``, the tool at rest with the bias moved by
-:data:`SHIFT` instead of a contact; with ``--nan``, every odd reading's fz is NaN.
+:data:`SHIFT` instead of a contact; with ``--nan``, every odd reading's fz is NaN; with
+``--joints-s=S``, the joint states stop after S seconds (the wrenches go on).
 
 ``python rclpy_peer.py subscribe TOPIC COUNT SECONDS OUT.json``: node ``listener`` collecting
 WrenchStamped on TOPIC until COUNT messages or SECONDS passed; writes
@@ -95,7 +97,9 @@ def _stamp(msg_stamp: object, t_ns: int) -> None:
     msg_stamp.sec, msg_stamp.nanosec = divmod(t_ns, 10**9)  # type: ignore[attr-defined]
 
 
-def publish(seconds: float, frame: str, description: bool, still: bool, nan: bool) -> None:
+def publish(
+    seconds: float, frame: str, description: bool, still: bool, nan: bool, joints_s: float
+) -> None:
     node = Node("sensor_driver")
     reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
     wrenches = node.create_publisher(WrenchStamped, "/ft_raw", reliable)
@@ -120,7 +124,7 @@ def publish(seconds: float, frame: str, description: bool, still: bool, nan: boo
         f, m = msg.wrench.force, msg.wrench.torque
         f.x, f.y, f.z, m.x, m.y, m.z = w
         wrenches.publish(msg)
-        if k % 2 == 0:
+        if k % 2 == 0 and k * PERIOD_NS < joints_s * 1e9:
             js = JointState(name=["yaw", "pitch"], position=list(Q))
             _stamp(js.header.stamp, time.time_ns())
             joints.publish(js)
@@ -248,6 +252,7 @@ if __name__ == "__main__":
                 "--description" in flags,
                 "--still" in flags,
                 "--nan" in flags,
+                float(next((f.split("=")[1] for f in flags if f.startswith("--joints-s=")), "inf")),
             )
         elif mode == "robot":
             robot(float(sys.argv[2]), sys.argv[3])
