@@ -59,7 +59,7 @@ def test_collect_without_truth_writes_only_the_samples_and_a_truth_file_says_wha
     data = json.loads(truth.read_text())
     assert data["format"] == "ftcomp.truth/1" and "not a calibration file" in data["description"]
     assert model_from_dict(data, str(truth)).weight_N == pytest.approx(3.153, abs=1e-9)
-    with pytest.raises(CalibrationFileError, match=r"unknown format 'ftcomp\.truth/1'"):
+    with pytest.raises(CalibrationFileError, match=r"its format is 'ftcomp\.truth/1'"):
         load_calibration(truth)
 
 

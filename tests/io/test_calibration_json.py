@@ -82,7 +82,8 @@ def test_calibration_file_round_trips(tmp_path, paper_calibration) -> None:
     [
         (
             lambda d: d.update(format="other/2"),
-            r"unknown format 'other/2'; expected 'ftcomp.calibration/1'",
+            r"not an ftcomp calibration file: its format is 'other/2'; ftcomp reads calibration "
+            r"files with \"format\": \"ftcomp.calibration/1\"",
         ),
         (lambda d: d.pop("force_bias_N"), r"missing key 'force_bias_N'"),
         (lambda d: d.update(tool_weight_N=float("nan")), r"'tool_weight_N' is not finite"),
@@ -215,3 +216,14 @@ def test_a_parameters_only_file_loads_and_saves_again(tmp_path: Path) -> None:
     assert back.weight_N == model.weight_N
     np.testing.assert_array_equal(back.center_of_gravity_m, model.center_of_gravity_m)
     assert json.loads(again.read_text())["std_errors"]["tool_weight_N"] is None
+
+
+def test_another_tools_json_is_described_and_what_ftcomp_reads_is_said(tmp_path) -> None:
+    path = tmp_path / "payload.json"
+    path.write_text('{"mass": 1.2, "cog": [0, 0, 0.05], "inertia": [0, 0, 0]}')
+    with pytest.raises(CalibrationFileError) as info:
+        load_calibration(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: not an ftcomp calibration file: a JSON object with no ")
+    assert "(keys: 'mass', 'cog', 'inertia')" in message
+    assert '"format": "ftcomp.calibration/1"' in message and "None" not in message

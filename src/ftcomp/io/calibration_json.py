@@ -51,6 +51,7 @@ __all__ = [
     "load_calibration",
     "model_from_dict",
     "model_to_dict",
+    "read_json_object",
     "save_calibration",
 ]
 
@@ -353,14 +354,28 @@ def _pose_rotations(data: Any, n: int) -> NDArray[np.float64]:
     return np.asarray(Rotation.from_quat(quat).as_matrix(), dtype=float).reshape(n, 3, 3)
 
 
-def load_calibration(path: str | os.PathLike[str]) -> Calibration:
-    """Read and check a calibration file.
+def _not_a_calibration(data: dict[str, Any]) -> str:
+    """What a JSON object without this format looks like, and what ftcomp reads."""
+    fmt = data.get("format")
+    keys = [str(k) for k in data][:8]
+    shown = ", ".join(repr(k) for k in keys) + (", ..." if len(data) > len(keys) else "")
+    found = (
+        f"its format is {fmt!r}"
+        if fmt is not None
+        else f"a JSON object with no 'format' key (keys: {shown or 'none'})"
+    )
+    return (
+        f"not an ftcomp calibration file: {found}; ftcomp reads calibration files with "
+        f'"format": "{FORMAT}" and the tool\'s parameters (docs/files.md), as ftcomp '
+        "calibrate writes them"
+    )
 
-    The physical parameters must be present and finite; the diagnostics are read where present
-    (NaN where absent), so a hand-written file with just the parameters also loads.
+
+def read_json_object(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """A JSON file's top-level object (checked: readable, valid, not too deep, an object).
 
     Raises:
-        CalibrationFileError: unreadable, not JSON, unknown format, missing keys, NaN.
+        CalibrationFileError: unreadable, not JSON, nested too deeply, not an object.
     """
     source = str(path)
     try:
@@ -385,10 +400,22 @@ def load_calibration(path: str | os.PathLike[str]) -> Calibration:
         raise CalibrationFileError(f"{source}: JSON nested too deeply to be a calibration")
     if not isinstance(data, dict):
         raise CalibrationFileError(f"{source}: expected a JSON object")
+    return data
+
+
+def load_calibration(path: str | os.PathLike[str]) -> Calibration:
+    """Read and check a calibration file.
+
+    The physical parameters must be present and finite; the diagnostics are read where present
+    (NaN where absent), so a hand-written file with just the parameters also loads.
+
+    Raises:
+        CalibrationFileError: unreadable, not JSON, unknown format, missing keys, NaN.
+    """
+    source = str(path)
+    data = read_json_object(path)
     if data.get("format") != FORMAT:
-        raise CalibrationFileError(
-            f"{source}: unknown format {data.get('format')!r}; expected {FORMAT!r}"
-        )
+        raise CalibrationFileError(f"{source}: {_not_a_calibration(data)}")
     if data.get("method") not in ("paper", "joint"):
         raise CalibrationFileError(
             f"{source}: 'method' must be 'paper' or 'joint', got {data.get('method')!r}"

@@ -12,12 +12,14 @@ file: its own format tag ``ftcomp.truth/1`` makes
 
 from __future__ import annotations
 
+import os
 from typing import Any, Final
 
-from ftcomp.io.calibration_json import model_to_dict
+from ftcomp.errors import CalibrationFileError
+from ftcomp.io.calibration_json import FORMAT, model_from_dict, model_to_dict, read_json_object
 from ftcomp.model import GravityModel
 
-__all__ = ["TRUTH_FORMAT", "TRUTH_HEADER", "truth_document"]
+__all__ = ["TRUTH_FORMAT", "TRUTH_HEADER", "load_truth", "truth_document"]
 
 #: The truth file's format tag.
 TRUTH_FORMAT: Final = "ftcomp.truth/1"
@@ -37,3 +39,22 @@ def truth_document(truth: GravityModel) -> dict[str, Any]:
     """The true parameters as a truth file's JSON-ready content (:data:`TRUTH_HEADER` and the
     calibration-file keys of :func:`~ftcomp.io.calibration_json.model_to_dict`)."""
     return {**TRUTH_HEADER, **model_to_dict(truth)}
+
+
+def load_truth(path: str | os.PathLike[str]) -> GravityModel:
+    """The true parameters of a truth file (``ftcomp.truth/1``, :mod:`ftcomp.io.truth_json`:
+    a simulator's or the twin's), to score a calibration against.
+
+    Raises:
+        CalibrationFileError: unreadable, not JSON, not a truth file, missing keys, NaN.
+    """
+    source = str(path)
+    data = read_json_object(path)
+    if data.get("format") != TRUTH_FORMAT:
+        fmt = data.get("format")
+        what = "a calibration, not a truth" if fmt == FORMAT else f"format {fmt!r}"
+        raise CalibrationFileError(
+            f'{source}: {what} file; a truth file has "format": "{TRUTH_FORMAT}" (what '
+            "the simulator and the twin write with their truth option)"
+        )
+    return model_from_dict(data, source)
