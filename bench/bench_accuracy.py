@@ -15,7 +15,9 @@ arm, 100 static poses in recording order, one reading each; docs/calibration.md)
 carry no times: pose k is given ``t = k`` seconds (the recording order is the clock).
 
 For each model (``none``, ``quadratic``, ``stochastic``, ``stochastic+map``: with the general
-linear sensor map, ``--sensor-map linear``), calibrate on a random subset of poses
+linear sensor map, ``--sensor-map linear``; ``default``: the model ``ftcomp calibrate`` chooses
+with no model flag, :func:`~ftcomp.calibration.identify_extended.identify`; ``--models`` a
+comma-separated subset, the same splits), calibrate on a random subset of poses
 and predict the others at their times through :func:`ftcomp.calibration.identify_extended.
 calibrate_extended` and :class:`~ftcomp.compensation.compensator.GravityCompensator` (what
 ``ftcomp calibrate`` and ``ftcomp compensate`` run), RMS over the held-out poses, median over
@@ -68,14 +70,14 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ftcomp.calibration.identify import calibrate, pose_means
-from ftcomp.calibration.identify_extended import calibrate_extended
+from ftcomp.calibration.identify_extended import calibrate_extended, identify
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.samples import Samples
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from calibration.sim_drift_data import subset
 
-MODELS = ("none", "quadratic", "stochastic", "stochastic+map")
+MODELS = ("none", "quadratic", "stochastic", "stochastic+map", "default")
 #: The tilt the twin recordings of docs/calibration.md were made with (the paper's) [deg].
 TWIN_TILT_DEG = (-0.204, -0.129)
 #: Their pace: 30 designed poses, 600 readings each, ``--move-s 1.5``, 2.4 s a pose (measured).
@@ -109,7 +111,9 @@ def held_out_rms(samples: Samples, train: np.ndarray, test: np.ndarray, model: s
         subset(samples, np.isin(np.arange(P), test)),
     )
     drift, _, mapped = model.partition("+")
-    if model == "none":
+    if model == "default":  # what ``ftcomp calibrate SAMPLES.csv`` fits: the model chosen
+        result = identify(fit_on, leave_one_out=False)[0]
+    elif model == "none":
         result = calibrate(fit_on, leave_one_out=False)
     else:
         result = calibrate_extended(
@@ -121,7 +125,7 @@ def held_out_rms(samples: Samples, train: np.ndarray, test: np.ndarray, model: s
     return float(np.sqrt(np.mean(e[:, :3] ** 2))), float(np.sqrt(np.mean(e[:, 3:] ** 2)))
 
 
-def real_table(samples: Samples, splits: int) -> None:
+def real_table(samples: Samples, splits: int, models: tuple[str, ...] = MODELS) -> None:
     rng = np.random.default_rng(0)
     P = len(np.unique(samples.pose))
     cases = {
@@ -132,7 +136,7 @@ def real_table(samples: Samples, splits: int) -> None:
     print(f"| model | {' | '.join(cases)} |")
     print("|---|" + "---|" * len(cases))
     draws = {name: [make() for _ in range(splits)] for name, make in cases.items()}
-    for model in MODELS:
+    for model in models:
         cells = []
         for name in cases:
             errors = np.array([held_out_rms(samples, tr, te, model) for tr, te in draws[name]])
@@ -517,6 +521,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--real", type=Path, help="folder with the 100-pose recording")
     parser.add_argument("--splits", type=int, default=30)
+    parser.add_argument(
+        "--models", default=",".join(MODELS), help="--real's rows, comma-separated (default: all)"
+    )
     parser.add_argument("--sim", action="store_true")
     parser.add_argument("--seeds", type=int, default=20)
     parser.add_argument("--recording", type=Path, help="a samples CSV with many readings a pose")
@@ -555,7 +562,7 @@ def main() -> None:
     if args.recording is not None:
         recording_table(args.recording, args.splits, args.twin_seed)
     if args.real is not None:
-        real_table(read_real(args.real), args.splits)
+        real_table(read_real(args.real), args.splits, tuple(args.models.split(",")))
     if args.sim:
         sim_table(args.seeds)
     if args.sim_recordings:

@@ -11,8 +11,8 @@ it found, with their standard errors.
 
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import Final
+from dataclasses import dataclass, replace
+from typing import Final, Literal, get_args
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,23 +28,251 @@ from ftcomp.calibration.identify import (
 )
 from ftcomp.calibration.methods import fit_paper, joint_sigma
 from ftcomp.calibration.mount import MIN_POSES, mount_from_fit, mount_warnings
+from ftcomp.calibration.stochastic import MIN_POSES as STOCHASTIC_MIN_POSES
 from ftcomp.calibration.stochastic import StochasticFit, fit_stochastic, pose_times
 from ftcomp.calibration_record import (
     DRIFT_ORDERS,
     SENSOR_MAP_SUPPORT,
     Calibration,
     DriftModel,
+    Method,
     MountAxes,
     SensorMap,
     StandardErrors,
 )
-from ftcomp.errors import IdentificationError
+from ftcomp.errors import IdentificationError, ParameterError
 from ftcomp.model import GravityModel
 from ftcomp.samples import Samples
 
-__all__ = ["calibrate_extended"]
+__all__ = [
+    "BIAS_CHOICES",
+    "DRIFT_SUPPORT",
+    "SENSOR_MAP_CHOICES",
+    "BiasChoice",
+    "ModelChoice",
+    "ModelSpec",
+    "SensorMapChoice",
+    "calibrate_extended",
+    "identify",
+]
+
+#: The bias model to identify: one of :data:`~ftcomp.calibration_record.DriftModel`, or
+#: ``"auto"``: the one the data support (:func:`identify`).
+BiasChoice = Literal["auto", "none", "linear", "quadratic", "stochastic"]
+BIAS_CHOICES: Final[tuple[str, ...]] = get_args(BiasChoice)
+#: The sensor map: ``"physical"`` (the paper's model), ``"linear"`` (fit the general linear map
+#: and apply it where the data support it) or ``"auto"`` (``"linear"`` wherever the bias model
+#: combines with it, else ``"physical"``).
+SensorMapChoice = Literal["auto", "physical", "linear"]
+SENSOR_MAP_CHOICES: Final[tuple[str, ...]] = get_args(SensorMapChoice)
+#: Restricted log-likelihood gain of the stochastic bias over a constant one above which the
+#: data support a drift (``"auto"``). The stochastic model adds 7 hyperparameters (a time
+#: constant and 6 scales), maximised, not integrated out: under a constant bias twice the gain
+#: is at most a chi-square of 7 degrees of freedom, above 14 in 5 % of sessions, so a gain of 7
+#: is Akaike's criterion (one per parameter); docs/calibration.md measures how often it
+#: is passed without drift and what it picks on the real recording.
+DRIFT_SUPPORT: Final = 7.0
 
 _LOO_REFITS: Final = 30  # leave-one-pose-out by exact refits up to this many poses
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """What to identify: the method, the bias model, the mount, the sensor map.
+
+    Attributes:
+        method: ``"paper"`` (the paper's two-stage linear fit: a constant bias, the physical
+            map, nothing else) or ``"joint"``.
+        bias_drift: a :data:`~ftcomp.calibration_record.DriftModel`, or ``"auto"`` (the
+            default): a stochastic bias where the data support it (:func:`identify`), else a
+            constant one.
+        identify_mount: None, ``"yaw"`` or ``"full"`` (:mod:`.mount`).
+        sensor_map: ``"physical"``, ``"linear"`` or ``"auto"`` (the default: ``"linear"``
+            wherever the bias model combines with it; applied only where the data support it).
+
+    Raises:
+        ParameterError: a choice out of its list, or one that does not combine with another
+            (the paper method with anything beyond it; the stochastic bias or the map with a
+            mount or a polynomial drift), naming the fields.
+    """
+
+    method: Method = "joint"
+    bias_drift: BiasChoice = "auto"
+    identify_mount: MountAxes | None = None
+    sensor_map: SensorMapChoice = "auto"
+
+    def __post_init__(self) -> None:
+        for name, value, allowed in (
+            ("method", self.method, get_args(Method)),
+            ("bias_drift", self.bias_drift, BIAS_CHOICES),
+            ("sensor_map", self.sensor_map, SENSOR_MAP_CHOICES),
+            ("identify_mount", self.identify_mount, (None, *get_args(MountAxes))),
+        ):
+            if value not in allowed:
+                raise ParameterError(
+                    f"{name} must be one of {', '.join(map(str, allowed))}, got {value!r}",
+                    field=name,
+                )
+        beyond = [
+            f"{name} {value}"
+            for name, value, plain in (
+                ("bias_drift", self.bias_drift, ("none", "auto")),
+                ("sensor_map", self.sensor_map, ("physical", "auto")),
+                ("identify_mount", self.identify_mount, (None,)),
+            )
+            if value not in plain
+        ]
+        if self.method == "paper" and beyond:
+            raise ParameterError(
+                f"{' and '.join(beyond)} need method joint (the paper method is its constant "
+                "bias and physical model only)",
+                field=("method", "bias_drift", "identify_mount", "sensor_map"),
+            )
+        gp = self.bias_drift == "stochastic" or self.sensor_map == "linear"
+        if gp and (self.identify_mount is not None or self.bias_drift in ("linear", "quadratic")):
+            raise ParameterError(
+                "bias_drift stochastic and sensor_map linear combine with neither identify_mount "
+                "nor a polynomial drift (identify the mount first, with a constant or "
+                "polynomial bias)",
+                field=("bias_drift", "sensor_map", "identify_mount"),
+            )
+
+
+@dataclass(frozen=True)
+class ModelChoice:
+    """The model :func:`identify` fitted, and why.
+
+    Attributes:
+        bias_drift: the bias model fitted.
+        sensor_map_fitted: whether the general linear map was fitted (the calibration's
+            ``sensor_map`` says whether it is applied).
+        reasons: one sentence per choice made from the data or forced by another (empty when
+            everything was given).
+    """
+
+    bias_drift: DriftModel
+    sensor_map_fitted: bool
+    reasons: tuple[str, ...]
+
+
+def identify(
+    samples: Samples, spec: ModelSpec | None = None, *, leave_one_out: bool = True
+) -> tuple[Calibration, ModelChoice]:
+    """Identify the model ``spec`` asks for (default: the best the data support).
+
+    The one entry point for every model: ``spec.bias_drift == "auto"`` compares a constant
+    bias with a stochastic one (:mod:`.stochastic`) by their restricted marginal likelihoods
+    (the same framework, nested models) and takes the stochastic one when it gains more than
+    :data:`DRIFT_SUPPORT`; it needs each reading's time and 6+ poses recorded in order, else the
+    bias is constant. A polynomial drift is never chosen: it is the stochastic model's poorer
+    cousin on every recording measured (docs/calibration.md) and extrapolates. ``sensor_map ==
+    "auto"`` fits the general linear map with a constant or stochastic bias and applies it where
+    its log Bayes factor exceeds :data:`~ftcomp.calibration_record.SENSOR_MAP_SUPPORT`.
+
+    Returns:
+        The calibration, and what was fitted with the reasons.
+
+    Raises:
+        IdentificationError: as :func:`~ftcomp.calibration.identify.calibrate` and
+            :func:`calibrate_extended` for the model chosen.
+    """
+    spec = spec or ModelSpec()
+    reasons: list[str] = []
+    bias: DriftModel
+    if spec.method == "paper":
+        result = calibrate(samples, method="paper", leave_one_out=leave_one_out)
+        return result, ModelChoice("none", False, ())
+    if spec.bias_drift != "auto":
+        bias = spec.bias_drift
+    elif spec.identify_mount is not None:
+        bias = "none"
+        reasons.append("a constant bias: with identify_mount no drift model is chosen")
+    else:
+        bias, why = _choose_bias(samples)
+        reasons.append(why)
+    if spec.sensor_map == "auto":
+        mapped = spec.identify_mount is None and bias in ("none", "stochastic")
+        if not mapped:
+            reasons.append(
+                "the physical sensor map: the linear map combines with neither identify_mount "
+                "nor a polynomial drift"
+            )
+    else:
+        mapped = spec.sensor_map == "linear"
+    if bias == "none" and spec.identify_mount is None:
+        result = calibrate(samples, method="joint", leave_one_out=leave_one_out)
+        if mapped:
+            result = _with_map_if_supported(samples, result, leave_one_out=leave_one_out)
+    else:
+        result = calibrate_extended(
+            samples,
+            bias_drift=bias,
+            identify_mount=spec.identify_mount,
+            leave_one_out=leave_one_out,
+            sensor_map=mapped,
+        )
+    if spec.sensor_map == "auto" and result.sensor_map is not None:
+        verdict = result.sensor_map.verdict()  # a choice made, not a warning
+        reasons.append(verdict)
+        result = replace(result, warnings=tuple(w for w in result.warnings if w != verdict))
+    return result, ModelChoice(bias, mapped, tuple(reasons))
+
+
+def _with_map_if_supported(
+    samples: Samples, constant: Calibration, *, leave_one_out: bool
+) -> Calibration:
+    """The constant-bias calibration with the linear map where the data support it; else
+    ``constant`` itself (the joint method's fit), the map's record and verdict added."""
+    mapped = _calibrate_stochastic(
+        samples, leave_one_out=False, drift=False, sensor_map=True, base=constant
+    )
+    record = mapped.sensor_map
+    if record is None or not record.applied:  # the usual case at few poses: no refits
+        return replace(
+            constant, sensor_map=record, warnings=(*constant.warnings, *_verdict(record))
+        )
+    if leave_one_out:
+        mapped = _calibrate_stochastic(
+            samples, leave_one_out=True, drift=False, sensor_map=True, base=constant
+        )
+    return mapped
+
+
+def _verdict(record: SensorMap | None) -> list[str]:
+    return [] if record is None else [record.verdict()]
+
+
+def _choose_bias(samples: Samples) -> tuple[DriftModel, str]:
+    """A stochastic bias where the data support it, else a constant one; and why."""
+    if samples.t is None:
+        return "none", (
+            "a constant bias: the samples have no times ('t'), so a drift cannot be told from "
+            "the tool"
+        )
+    try:
+        t_pose = pose_times(samples)
+    except IdentificationError as exc:
+        return "none", f"a constant bias: no drift model fits these times ({exc})"
+    if len(t_pose) < STOCHASTIC_MIN_POSES:
+        return "none", (
+            f"a constant bias: {len(t_pose)} poses; a drift model needs "
+            f"{STOCHASTIC_MIN_POSES} or more"
+        )
+    base = calibrate(samples, method="joint", leave_one_out=False)
+    inputs = _StochasticInputs.of(samples, base, drift=True)
+    constant = inputs.fit(drift=False, sensor_map=False, leave_one_out=False)[0]
+    drifting = inputs.fit(drift=True, sensor_map=False, leave_one_out=False)[0]
+    gain = drifting.log_likelihood - constant.log_likelihood
+    if gain > DRIFT_SUPPORT:
+        return "stochastic", (
+            f"a stochastic bias drift: the data support it (restricted log likelihood "
+            f"{gain:+.1f} over a constant bias, > {DRIFT_SUPPORT:g}; time constant "
+            f"{drifting.drift.time_constant_s:.3g} s)"
+        )
+    return "none", (
+        f"a constant bias: the data do not support a drift (restricted log likelihood of a "
+        f"stochastic drift {gain:+.1f} over it, needs > {DRIFT_SUPPORT:g})"
+    )
 
 
 def calibrate_extended(
@@ -161,44 +389,73 @@ def _refitted(
     )
 
 
-def _calibrate_stochastic(
-    samples: Samples, *, leave_one_out: bool, drift: bool, sensor_map: bool
-) -> Calibration:
-    """The joint method with the bias a Matérn 3/2 process (:mod:`.stochastic`) and/or a
-    general linear sensor map (:mod:`.sensor_map`)."""
-    base = calibrate(samples, method="joint", leave_one_out=False)
-    _, R, wrench, count, var_mean = pose_means(samples)
-    t_pose = pose_times(samples) if drift else np.arange(len(R), dtype=float)
-    repeated = bool(np.any(count > 1))
-    sigma = (
-        joint_sigma(wrench, R, var_mean, count, fit_paper(wrench, R))
-        if repeated
-        else np.zeros_like(wrench)  # one reading per pose: the white scatter carries the noise
-    )
-    t_all = t_pose if samples.t is None or not drift else samples.t
-    t_range = (float(t_all.min()), float(t_all.max()))
-    theta0 = np.concatenate(
-        [
-            base.model.gravity_base_N,
-            base.model.force_bias_N,
-            base.model.torque_bias_Nm,
-            base.model.center_of_gravity_m,
-        ]
-    )
+@dataclass(frozen=True)
+class _StochasticInputs:
+    """The per-pose data of a fit in the framework of :mod:`.stochastic`, prepared once."""
 
-    def run(with_map: bool) -> tuple[StochasticFit, NDArray[np.float64]]:
+    source: str
+    R: NDArray[np.float64]
+    wrench: NDArray[np.float64]
+    sigma: NDArray[np.float64]
+    t_pose: NDArray[np.float64]
+    t_range: tuple[float, float]
+    theta0: NDArray[np.float64]
+
+    @classmethod
+    def of(cls, samples: Samples, base: Calibration, *, drift: bool) -> _StochasticInputs:
+        """From the samples and their constant-bias joint calibration ``base`` (the start)."""
+        _, R, wrench, count, var_mean = pose_means(samples)
+        t_pose = pose_times(samples) if drift else np.arange(len(R), dtype=float)
+        repeated = bool(np.any(count > 1))
+        sigma = (
+            joint_sigma(wrench, R, var_mean, count, fit_paper(wrench, R))
+            if repeated
+            else np.zeros_like(wrench)  # one reading per pose: the white scatter carries the noise
+        )
+        t_all = t_pose if samples.t is None or not drift else samples.t
+        m = base.model
+        theta0 = np.concatenate(
+            [m.gravity_base_N, m.force_bias_N, m.torque_bias_Nm, m.center_of_gravity_m]
+        )
+        t_range = (float(t_all.min()), float(t_all.max()))
+        return cls(samples.source, R, wrench, sigma, t_pose, t_range, theta0)
+
+    def fit(
+        self, *, drift: bool, sensor_map: bool, leave_one_out: bool
+    ) -> tuple[StochasticFit, NDArray[np.float64]]:
+        """:func:`~.stochastic.fit_stochastic` on these data."""
         return fit_stochastic(
-            wrench,
-            R,
-            sigma,
-            theta0,
-            t_pose,
-            t_range_s=t_range,
-            source=samples.source,
+            self.wrench,
+            self.R,
+            self.sigma,
+            self.theta0,
+            self.t_pose,
+            t_range_s=self.t_range,
+            source=self.source,
             drift=drift,
-            sensor_map=with_map,
+            sensor_map=sensor_map,
             leave_one_out=leave_one_out,
         )
+
+
+def _calibrate_stochastic(
+    samples: Samples,
+    *,
+    leave_one_out: bool,
+    drift: bool,
+    sensor_map: bool,
+    base: Calibration | None = None,
+) -> Calibration:
+    """The joint method with the bias a Matérn 3/2 process (:mod:`.stochastic`) and/or a
+    general linear sensor map (:mod:`.sensor_map`); ``base``: the samples' constant-bias
+    joint calibration, if already made."""
+    if base is None:
+        base = calibrate(samples, method="joint", leave_one_out=False)
+    inputs = _StochasticInputs.of(samples, base, drift=drift)
+    R, wrench, t_pose = inputs.R, inputs.wrench, inputs.t_pose
+
+    def run(with_map: bool) -> tuple[StochasticFit, NDArray[np.float64]]:
+        return inputs.fit(drift=drift, sensor_map=with_map, leave_one_out=leave_one_out)
 
     fit, loo = run(False)
     mapped = None

@@ -12,24 +12,38 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from ftcomp.calibration.identify import calibrate
+from ftcomp.calibration.identify import deviations_in_standard_errors
+from ftcomp.calibration.identify_extended import (
+    BIAS_CHOICES,
+    SENSOR_MAP_CHOICES,
+    ModelChoice,
+    ModelSpec,
+    identify,
+)
 from ftcomp.calibration_record import (
     Calibration,
-    DriftModel,
     Method,
     MountAxes,
     StochasticBiasDrift,
 )
 from ftcomp.cli.common import add_range_argument, print_warnings
 from ftcomp.cli.still_options import add_still_arguments, print_segments, still_config
-from ftcomp.errors import ParameterError
 from ftcomp.extras import require_extra
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.calibration_json import calibration_to_dict, save_calibration
 from ftcomp.io.samples_csv import read_samples
+from ftcomp.io.truth_json import load_truth
+from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS, Samples
 
-__all__ = ["console", "register", "render_calibration", "tilt_not_identified"]
+__all__ = [
+    "console",
+    "print_choice",
+    "register",
+    "render_calibration",
+    "render_truth",
+    "tilt_not_identified",
+]
 
 
 def register(parser: argparse.ArgumentParser) -> None:
@@ -63,12 +77,13 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--bias-drift",
-        choices=get_args(DriftModel),
-        default="none",
-        help="fit the force and torque bias as a function of each reading's time t, with the "
-        "tool model shared: a polynomial, or stochastic (a smooth Matérn 3/2 wander, its size "
-        "and time constant from the data, 6+ poses); past the session the bias is held at its "
-        "last estimate; needs a t column (joint method; default: none, a constant bias)",
+        choices=BIAS_CHOICES,
+        default="auto",
+        help="the bias model: none (constant), a polynomial in each reading's time t, or "
+        "stochastic (a smooth Matérn 3/2 wander, its size and time constant from the data, 6+ "
+        "poses), with the tool model shared; past the session the bias is held at its last "
+        "estimate; a drift needs a t column and the joint method (default: auto, stochastic "
+        "where the data support it over a constant bias, printed with the evidence)",
     )
     parser.add_argument(
         "--identify-mount",
@@ -80,12 +95,12 @@ def register(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--sensor-map",
-        choices=("physical", "linear"),
-        default="physical",
+        choices=SENSOR_MAP_CHOICES,
+        default="auto",
         help="linear: also fit a general linear map of the tool's gravity wrench (gain, "
-        "crosstalk, mount misalignment), regularised toward the physical model so that it does "
-        "little harm at few poses, and say whether the data support it (joint method, with a "
-        "constant or stochastic bias; default: physical, the paper's model)",
+        "crosstalk, mount misalignment), regularised toward the physical model, and apply it "
+        "only where the data support it (joint method, with a constant or stochastic bias); "
+        "physical: the paper's model (default: auto, linear wherever the bias model allows it)",
     )
     add_range_argument(parser)
     parser.add_argument(
@@ -110,6 +125,13 @@ def register(parser: argparse.ArgumentParser) -> None:
         "drift (needs matplotlib, extra report; default: none)",
     )
     parser.add_argument(
+        "--truth",
+        metavar="TRUTH.json",
+        help="a truth file (ftcomp.truth/1: ftcomp twin --truth, sim collect --truth): print "
+        "each identified parameter's distance from the true one in its standard errors "
+        "(default: none)",
+    )
+    parser.add_argument(
         "--force", action="store_true", help="replace an existing -o file (default: refuse)"
     )
     parser.set_defaults(handler=run)
@@ -124,28 +146,19 @@ def run(args: argparse.Namespace) -> int:
         others = [args.samples, *([args.output] if args.output else [])]
         check_writable(args.report, overwrite=args.force, inputs=others)
         require_extra("report", "calibrate --report")
+    truth = load_truth(args.truth) if args.truth is not None else None
     force_range, torque_range = args.range if args.range else (None, None)
     samples = read_samples(args.samples, force_range_N=force_range, torque_range_Nm=torque_range)
     print_warnings(samples.warnings)
     if args.still_segments:
         samples = _still_segments(samples, args)
-    mapped = args.sensor_map == "linear"
-    extended = args.bias_drift != "none" or args.identify_mount is not None or mapped
-    if extended and args.method != "joint":
-        raise ParameterError(
-            "--bias-drift, --identify-mount and --sensor-map linear need --method joint"
-        )
-    if extended:
-        from ftcomp.calibration.identify_extended import calibrate_extended
-
-        result = calibrate_extended(
-            samples,
-            bias_drift=args.bias_drift,
-            identify_mount=args.identify_mount,
-            sensor_map=mapped,
-        )
-    else:
-        result = calibrate(samples, method=args.method)
+    spec = ModelSpec(
+        method=args.method,
+        bias_drift=args.bias_drift,
+        identify_mount=args.identify_mount,
+        sensor_map=args.sensor_map,
+    )
+    result, choice = identify(samples, spec)
     if output is not None:
         save_calibration(output, result)
     if args.report is not None:
@@ -154,19 +167,48 @@ def run(args: argparse.Namespace) -> int:
         write_calibration_report(args.report, result, source=args.samples, samples=samples)
     if args.json:
         print(json.dumps(calibration_to_dict(result), indent=2, allow_nan=False))
+        print_choice(choice, Console(stderr=True))
         hidden = tilt_not_identified(result)
         print_warnings([hidden] if hidden is not None else [])
     else:
         out = console()
-        render_calibration(result, out)
+        print_choice(choice, out)
+        render_calibration(result, out, unapplied_map=args.sensor_map == "linear")
         if output is not None:
             out.print(f"calibration written to [bold]{output}[/bold]")
         else:
             out.print("calibration not written (give -o CALIBRATION.json to keep it)")
         if args.report is not None:
             out.print(f"report written to [bold]{args.report}[/bold]")
+    if truth is not None:
+        render_truth(result, truth, args.truth, Console(stderr=True) if args.json else console())
     print_warnings(w for w in result.warnings if w not in samples.warnings)
     return 0
+
+
+def render_truth(result: Calibration, truth: GravityModel, source: str, out: Console) -> None:
+    """Each identified parameter's distance from the truth in its standard errors."""
+    each = deviations_in_standard_errors(result, truth)
+    table = Table(title=f"Distance from the truth ({source}) in standard errors |est - true| / SE")
+    for col in ("parameter", "x", "y", "z"):
+        table.add_column(col, justify="left" if col == "parameter" else "right")
+    table.add_row("tool weight G", f"{each['tool_weight_N']:.2f}", "", "")
+    table.add_row("base tilt U, V", f"{each['tilt_U_rad']:.2f}", f"{each['tilt_V_rad']:.2f}", "")
+    for label, key in (
+        ("force bias F0", "force_bias_N"),
+        ("torque bias M0", "torque_bias_Nm"),
+        ("centre of gravity P", "center_of_gravity_m"),
+    ):
+        table.add_row(label, *(f"{each[f'{key}[{k}]']:.2f}" for k in range(3)))
+    out.print(table)
+    worst = max(each, key=lambda k: each[k])
+    out.print(f"largest: {worst} at {each[worst]:.2f} standard errors", highlight=False)
+
+
+def print_choice(choice: ModelChoice, out: Console) -> None:
+    """The model chosen from the data, one line per choice with its reason."""
+    for reason in choice.reasons:
+        out.print(f"model: {reason}", highlight=False)
 
 
 def _still_segments(samples: Samples, args: argparse.Namespace) -> Samples:
@@ -206,8 +248,9 @@ def tilt_not_identified(result: Calibration) -> str | None:
     )
 
 
-def _render_extensions(result: Calibration, console: Console) -> None:
-    """The bias drift's rates and the mount's angles, each ± its standard error."""
+def _render_extensions(result: Calibration, console: Console, *, unapplied_map: bool) -> None:
+    """The bias drift's rates, the sensor map (``unapplied_map``: also one the data do not
+    support) and the mount's angles, each ± its standard error."""
     drift, mount = result.bias_drift, result.mount
     if isinstance(drift, StochasticBiasDrift):
         std = drift.offset_std(np.array([drift.t_max_s + 600.0]))[0]
@@ -241,7 +284,7 @@ def _render_extensions(result: Calibration, console: Console) -> None:
                 ),
             )
         console.print(table)
-    if result.sensor_map is not None:
+    if result.sensor_map is not None and (result.sensor_map.applied or unapplied_map):
         table = Table(title="Linear sensor map delta (force rows: fraction; torque rows: mm)")
         table.add_column("row")
         for col in ("x", "y", "z"):
@@ -294,8 +337,11 @@ def _worst_poses(result: Calibration, n: int) -> list[int]:
     return sorted(np.argsort(score)[-n:].tolist())
 
 
-def render_calibration(result: Calibration, console: Console) -> None:
-    """Print the parameters ± standard error, per-pose residuals, Table 3 and warnings."""
+def render_calibration(
+    result: Calibration, console: Console, *, unapplied_map: bool = True
+) -> None:
+    """Print the parameters ± standard error, per-pose residuals, Table 3 and warnings
+    (``unapplied_map``: the sensor map's table even where the data do not support it)."""
     m, se = result.model, result.std_errors
     params = Table(title=f"Calibration ({result.method} method, {len(result.pose_ids)} poses)")
     for col in ("parameter", "x", "y", "z", "unit"):
@@ -320,7 +366,7 @@ def render_calibration(result: Calibration, console: Console) -> None:
         "mm",
     )
     console.print(params)
-    _render_extensions(result, console)
+    _render_extensions(result, console, unapplied_map=unapplied_map)
 
     n_poses = len(result.pose_ids)
     shown = _worst_poses(result, MAX_POSES_SHOWN)
