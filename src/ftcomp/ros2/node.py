@@ -183,6 +183,8 @@ class CompensationNode:
                 f"no joint states naming {', '.join(self._pose.missing())} on "
                 f"{config.joint_states} within {config.timeout_s:g} s"
             )
+        self._out_sensor, self._out_base = WrenchStamped(), WrenchStamped()
+        self._out_base.header.frame_id = config.base_frame
         self._pub_sensor = node.create_publisher(WrenchStamped, "~/wrench_compensated", STREAM_QOS)
         self._pub_base = node.create_publisher(WrenchStamped, "~/wrench_contact_base", STREAM_QOS)
         self._pub_diag = node.create_publisher(DiagnosticArray, "/diagnostics", DEFAULT_QOS)
@@ -215,7 +217,7 @@ class CompensationNode:
         if frame != config.sensor_frame:
             self._drop(f"a wrench in frame {frame!r}, the calibration's is {config.sensor_frame!r}")
             return
-        if not all(math.isfinite(v) for v in wrench):
+        if not np.isfinite(wrench).all():
             self._drop(f"a non-finite wrench on {config.wrench_topic}")
             return
         received = received_ns(info)
@@ -238,15 +240,15 @@ class CompensationNode:
         assert compensator is not None
         R_feed = R if R_T is None else R @ R_T  # a mount-identified calibration's frame
         contact = compensator.compensate(wrench, R_feed)
-        out = WrenchStamped()
-        out.header.stamp = msg.header.stamp
+        # Two messages made once and refilled (one reading at a time: the readings' callback
+        # group is mutually exclusive; publish serialises at once): building a WrenchStamped
+        # costs about 80 us, most of a reading's budget at 1 kHz (measured).
+        out, base = self._out_sensor, self._out_base
+        out.header.stamp = base.header.stamp = msg.header.stamp
         out.header.frame_id = msg.header.frame_id
         _fill(out, contact)
         self._pub_sensor.publish(out)
-        base = WrenchStamped()
-        base.header.stamp = msg.header.stamp
-        base.header.frame_id = config.base_frame
-        _fill(base, np.concatenate([R @ contact[:3], R @ contact[3:]]))
+        _fill(base, (R @ contact.reshape(2, 3).T).T.ravel())
         self._pub_base.publish(base)
         with self._lock:
             self._status.published += 1
@@ -372,6 +374,6 @@ class CompensationNode:
 
 
 def _fill(msg: WrenchStamped, wrench: NDArray[np.float64]) -> None:
-    fx, fy, fz, tx, ty, tz = (float(v) for v in wrench)
+    fx, fy, fz, tx, ty, tz = wrench.tolist()
     f, m = msg.wrench.force, msg.wrench.torque
     f.x, f.y, f.z, m.x, m.y, m.z = fx, fy, fz, tx, ty, tz
