@@ -65,7 +65,7 @@ def _log_whole(path: Path) -> bool:
     return all(math.isfinite(v) for v in t) and t == sorted(t)
 
 
-def one_try(fault: str, k: int, folder: Path) -> str:
+def one_try(fault: str, k: int, folder: Path, args_dump: Path | None = None) -> str:
     """One twin and one run; how it ended (``ok`` or what went wrong)."""
     robot, sensor = f"127.0.{134 + k % 100}.{10 + FAULTS.index(fault) * 2}", ""
     sensor = robot.rsplit(".", 1)[0] + "." + str(int(robot.rsplit(".", 1)[1]) + 1)
@@ -87,8 +87,8 @@ def one_try(fault: str, k: int, folder: Path) -> str:
         _calibration(truth, cal)
         try:
             done = subprocess.run(
-                [sys.executable, "-c", CLIENT, "run", "--robot", robot_uri, "--sensor",
-                 sensor_uri, "-c", str(cal), "--control", "admittance", "--axes", "z",
+                [sys.executable, "-X", "faulthandler", "-c", CLIENT, "run", "--robot", robot_uri,
+                 "--sensor", sensor_uri, "-c", str(cal), "--control", "admittance", "--axes", "z",
                  "--settle-band-N", "0.0001", "--seconds", "3", "--max-late-cycles", "50",
                  "-o", str(log)],
                 capture_output=True, text=True, timeout=30.0, check=False, env=dict(os.environ),
@@ -96,7 +96,9 @@ def one_try(fault: str, k: int, folder: Path) -> str:
         except subprocess.TimeoutExpired:
             return "hang (killed after 30 s)"
         if done.returncode != 1:
-            tail = (done.stderr.strip().splitlines() or [""])[-1]
+            if args_dump is not None:
+                (args_dump / f"{fault}-{k}.stderr").write_text(done.stderr)
+            tail = (done.stderr.strip().splitlines() or [""])[0]
             return f"exit {done.returncode}: {tail}"
         if SAYS[fault] not in done.stderr or "the robot was stopped" not in done.stderr:
             return f"exit 1 without the documented message: {done.stderr.strip()[-200:]}"
@@ -117,6 +119,7 @@ def main() -> int:
     parser.add_argument("--tries", type=int, default=50)
     parser.add_argument("--fault", choices=FAULTS, action="append")
     parser.add_argument("--verbose", action="store_true", help="one line per try")
+    parser.add_argument("--dump", type=Path, help="write each failed try's stderr here")
     args = parser.parse_args()
     failed = 0
     with tempfile.TemporaryDirectory() as tmp:
@@ -124,7 +127,7 @@ def main() -> int:
             ends: collections.Counter[str] = collections.Counter()
             t0 = time.monotonic()
             for k in range(args.tries):
-                end = one_try(fault, k, Path(tmp))
+                end = one_try(fault, k, Path(tmp), args.dump)
                 ends[end] += 1
                 if args.verbose:
                     print(f"  {fault} try {k + 1}: {end}", flush=True)

@@ -132,3 +132,48 @@ def test_the_cli_offers_every_law_of_the_library() -> None:
     run_parser = commands.choices["run"]
     law = next(a for a in run_parser._actions if a.dest == "law")
     assert tuple(law.choices) == LAWS  # read from AdmittanceConfig's field, never copied
+
+
+def test_two_ctrl_c_end_run_with_the_robot_stopped_and_the_summary(
+    tmp_path: Path,
+    recorded_calibration: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The first Ctrl-C in the loop, the second while the robot is being stopped and
+    disconnected (the cell's exit): once that second one cut the exit short and run said only
+    ``error: interrupted``."""
+    import signal
+
+    from ftcomp.sim.cell import SimCell
+
+    cycles = {"n": 0}
+    wait_cycle, leave = SimCell.wait_cycle, SimCell.__exit__
+
+    def pressed_in_the_loop(self: SimCell) -> None:
+        cycles["n"] += 1
+        if cycles["n"] == 200:
+            signal.raise_signal(signal.SIGINT)
+        wait_cycle(self)
+
+    def pressed_while_closing(self: SimCell, *exc: object) -> None:
+        signal.raise_signal(signal.SIGINT)
+        leave(self, *exc)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(SimCell, "wait_cycle", pressed_in_the_loop)
+    monkeypatch.setattr(SimCell, "__exit__", pressed_while_closing)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)  # as in a terminal
+    try:
+        code = main(
+            [
+                *("run", "--robot", PLACE, "--sensor", "sim://", "-c", str(recorded_calibration)),
+                *("--control", "admittance", "--axes", "z", "--seconds", "5"),
+                *("-o", str(tmp_path / "run.csv")),
+            ]
+        )
+    finally:
+        signal.signal(signal.SIGINT, before)
+    err = capsys.readouterr().err
+    assert code == 130, err
+    assert "Ctrl-C again to abandon it" in err
+    assert "the robot was stopped" in err and "cycles in" in err, err

@@ -26,9 +26,13 @@ def register(parser: argparse.ArgumentParser) -> None:
 
     parser.description = __doc__.split("\n\n", 1)[1].replace("``", "") if __doc__ else None
     parser.formatter_class = argparse.RawDescriptionHelpFormatter
-    actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
+    actions = parser.add_subparsers(
+        dest="action", metavar="ACTION", required=True, help="set: write the payload"
+    )
     set_parser = actions.add_parser(
-        "set", help="write the calibration's mass and centre of gravity to the controller"
+        "set",
+        help="write the calibration's mass and centre of gravity to the controller",
+        description="write the calibration's mass and centre of gravity to the controller",
     )
     set_parser.add_argument("robot", metavar="ur://HOST", help="the UR controller")
     set_parser.add_argument(

@@ -24,6 +24,8 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ftcomp.cli.common import (
     add_rebias_argument,
@@ -37,7 +39,11 @@ from ftcomp.cli.live_status import add_view_arguments
 from ftcomp.cli.options import add_field_option, map_field
 from ftcomp.control.safety import UniformLimits
 from ftcomp.session.compliant import SettleRule
-from ftcomp.session.run import AdmittanceConfig, RunConfig
+from ftcomp.session.interrupts import InterruptHold
+from ftcomp.session.run import AdmittanceConfig, RunConfig, RunResult
+
+if TYPE_CHECKING:
+    from ftcomp.calibration_record import Calibration
 
 __all__ = ["register", "run"]
 
@@ -182,9 +188,6 @@ def run(args: argparse.Namespace) -> int:
     from ftcomp.io.atomic import check_writable
     from ftcomp.io.calibration_json import load_calibration
     from ftcomp.session.online_load import event_lines
-    from ftcomp.session.rebias_live import rebias_still
-    from ftcomp.session.run import run_compliant
-    from ftcomp.views.live import session_observers
 
     _check(args)
     config = _config(args)
@@ -194,6 +197,55 @@ def run(args: argparse.Namespace) -> int:
     calibration = load_calibration(args.calibration)
     if args.rebias_s is None:  # a re-bias drops the drift model
         warn_live_drift(calibration, args.calibration, tracking=args.track_bias)
+    # Ctrl-C held from before the hardware opens until it is closed (the robot stopped): the
+    # session's own hold ends with the loop, and a second Ctrl-C while the robot was being
+    # stopped and disconnected cut that short, with no summary (issue 34's trial).
+    with InterruptHold() as hold:
+        hold.what = f"stopping the robot and finishing {output}"
+        try:
+            result = _run_session(args, calibration, config, output, hold)
+        except KeyboardInterrupt:
+            print(
+                "error: interrupted (Ctrl-C) before the loop started; the robot was stopped",
+                file=sys.stderr,
+            )
+            return 130
+    summary = f"{result.cycles} cycles in {result.duration_s:.2f} s, log {output}"
+    if args.log is not None:
+        summary += f", MCAP {args.log}"
+    if result.cycles:
+        t, e, window_s = result.travel_m * 1e3, result.final_error, config.final_error_window_s
+        summary += (
+            f"; travel [{t[0]:+.2f} {t[1]:+.2f} {t[2]:+.2f}] mm, "
+            f"mean force error over the last {window_s:g} s "
+            f"[{e[0]:+.3f} {e[1]:+.3f} {e[2]:+.3f}] N ({args.frame} frame)"
+        )
+    for line in live_end_lines(result):
+        print(line)
+    if config.online_load:
+        print(f"online load: rate {1.0 / result.period_s:.1f} Hz (1 / the robot's control period)")
+        print("\n".join(event_lines(list(result.load_events))))
+    if result.faulted:
+        code = 130 if result.outcome == "interrupted" else 1
+        print(f"error: {result.message}; the robot was stopped; {summary}", file=sys.stderr)
+        return code
+    print(f"{result.outcome}: {summary}")
+    return 0
+
+
+def _run_session(
+    args: argparse.Namespace,
+    calibration: Calibration,
+    config: RunConfig,
+    output: Path,
+    hold: InterruptHold,
+) -> RunResult:
+    """Open the hardware, run the loop, close the hardware (the robot stopped); Ctrl-C held
+    by ``hold`` once the loop has ended."""
+    from ftcomp.session.rebias_live import rebias_still
+    from ftcomp.session.run import run_compliant
+    from ftcomp.views.live import session_observers
+
     with (
         session_observers(
             args.log, args.view, overwrite=args.force, control_frame=args.frame
@@ -219,24 +271,5 @@ def run(args: argparse.Namespace) -> int:
             source=args.calibration,
             observers=observers,
         )
-    summary = f"{result.cycles} cycles in {result.duration_s:.2f} s, log {output}"
-    if args.log is not None:
-        summary += f", MCAP {args.log}"
-    if result.cycles:
-        t, e, window_s = result.travel_m * 1e3, result.final_error, config.final_error_window_s
-        summary += (
-            f"; travel [{t[0]:+.2f} {t[1]:+.2f} {t[2]:+.2f}] mm, "
-            f"mean force error over the last {window_s:g} s "
-            f"[{e[0]:+.3f} {e[1]:+.3f} {e[2]:+.3f}] N ({args.frame} frame)"
-        )
-    for line in live_end_lines(result):
-        print(line)
-    if config.online_load:
-        print(f"online load: rate {1.0 / result.period_s:.1f} Hz (1 / the robot's control period)")
-        print("\n".join(event_lines(list(result.load_events))))
-    if result.faulted:
-        code = 130 if result.outcome == "interrupted" else 1
-        print(f"error: {result.message}; the robot was stopped; {summary}", file=sys.stderr)
-        return code
-    print(f"{result.outcome}: {summary}")
-    return 0
+        hold.finishing(f"stopping the robot and finishing {output}")
+    return result

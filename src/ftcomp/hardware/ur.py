@@ -199,7 +199,6 @@ class URRobot(LatenessOfPacer):
             if self.control is not None:
                 control, self.control = self.control, None
                 if self._silent:  # stopScript would wait for the program's end in silent data
-                    _bounded(control.disconnect, "ur-disconnect")
                     _abandon(control)
                 else:
                     control.stopScript()
@@ -207,7 +206,6 @@ class URRobot(LatenessOfPacer):
             if self.receive is not None:
                 receive, self.receive = self.receive, None
                 if self._silent:
-                    _bounded(receive.disconnect, "ur-disconnect")
                     _abandon(receive)
                 else:
                     receive.disconnect()
@@ -551,15 +549,19 @@ _ABANDONED: list[object] = []
 
 
 def _abandon(interface: object) -> None:
-    """Never destroy a ur_rtde interface whose controller went silent.
+    """Leave a ur_rtde interface whose controller went silent: neither disconnect nor destroy it.
 
     Its receive thread (the control interface has one of its own) reconnects without a time
-    limit once the data stop, and ``disconnect`` may return without joining it; destroying the
-    interface then destroys a joinable ``std::thread``: ``terminate called without an active
-    exception``, the process killed (exit -6) after ``run`` had stopped on the fault (ur_rtde
-    1.6.5; issue 34). So the interface is kept, with a reference the interpreter never drops
-    (not even when it clears modules at exit), and the operating system reclaims its thread
-    and sockets when the process ends."""
+    limit once the data stop. ``disconnect`` joins it, so it was called on a worker thread
+    (:func:`_bounded`) and left running; when it returned while the interpreter was already
+    finishing, the worker re-entering Python was ended by ``pthread_exit`` inside pybind11's
+    GIL guard (a ``noexcept`` destructor), and destroying an interface with that thread still
+    joinable does the same: ``terminate called without an active exception``, the process
+    killed (exit -6) after ``run`` had stopped on the fault and written its log (ur_rtde
+    1.6.5; issue 34, seen in 2 of 3 tries on a busy host). So the interface is kept, with a
+    reference the interpreter never drops (not even when it clears modules at exit), nothing
+    of ours waits on it, and the operating system ends its threads and closes its sockets
+    with the process."""
     _ABANDONED.append(interface)
     ctypes.pythonapi.Py_IncRef(ctypes.py_object(interface))
 
