@@ -24,7 +24,8 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="a shorter run, about 20 s instead of 35 s (fewer readings, shorter sweeps)",
+        help="a shorter run, a little over half the full demo's 70 s on a 2-core machine "
+        "(fewer readings, shorter sweeps; README)",
     )
     parser.add_argument(
         "--seed", type=int, default=0, help="seed of every simulated sensor's noise (default: 0)"
