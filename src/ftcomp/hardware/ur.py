@@ -39,6 +39,8 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import math
+import os
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -58,7 +60,14 @@ from ftcomp.hardware.protocols import ClockName, PoseSample, Robot
 from ftcomp.hardware.registry import Uri
 from ftcomp.hardware.rtde_probe import probe_rtde
 
-__all__ = ["RECEIVE_VARIABLES", "Payload", "URRobot", "open_robot", "set_payload"]
+__all__ = [
+    "RECEIVE_VARIABLES",
+    "Payload",
+    "URRobot",
+    "exit_process_if_abandoned",
+    "open_robot",
+    "set_payload",
+]
 
 #: RTDE outputs the backend reads (``ft_raw_wrench`` is added on PolyScope 5.9 or later).
 RECEIVE_VARIABLES = (
@@ -199,6 +208,7 @@ class URRobot(LatenessOfPacer):
             if self.control is not None:
                 control, self.control = self.control, None
                 if self._silent:  # stopScript would wait for the program's end in silent data
+                    _bounded(control.disconnect, "ur-disconnect")
                     _abandon(control)
                 else:
                     control.stopScript()
@@ -206,6 +216,7 @@ class URRobot(LatenessOfPacer):
             if self.receive is not None:
                 receive, self.receive = self.receive, None
                 if self._silent:
+                    _bounded(receive.disconnect, "ur-disconnect")
                     _abandon(receive)
                 else:
                     receive.disconnect()
@@ -549,21 +560,32 @@ _ABANDONED: list[object] = []
 
 
 def _abandon(interface: object) -> None:
-    """Leave a ur_rtde interface whose controller went silent: neither disconnect nor destroy it.
+    """Never destroy a ur_rtde interface whose controller went silent (once its bounded
+    ``disconnect`` has been asked).
 
     Its receive thread (the control interface has one of its own) reconnects without a time
-    limit once the data stop. ``disconnect`` joins it, so it was called on a worker thread
-    (:func:`_bounded`) and left running; when it returned while the interpreter was already
-    finishing, the worker re-entering Python was ended by ``pthread_exit`` inside pybind11's
-    GIL guard (a ``noexcept`` destructor), and destroying an interface with that thread still
-    joinable does the same: ``terminate called without an active exception``, the process
-    killed (exit -6) after ``run`` had stopped on the fault and written its log (ur_rtde
-    1.6.5; issue 34, seen in 2 of 3 tries on a busy host). So the interface is kept, with a
-    reference the interpreter never drops (not even when it clears modules at exit), nothing
-    of ours waits on it, and the operating system ends its threads and closes its sockets
-    with the process."""
+    limit once the data stop; destroying the interface then ends the process in ur_rtde's
+    teardown: ``terminate called without an active exception``, exit -6, after ``run`` had
+    stopped on the fault and written its log (ur_rtde 1.6.5; issue 34: 2 of 3 rtde-stop tries
+    on a busy host). Skipping the ``disconnect`` as well is worse (every try aborted at exit:
+    the library's threads must be told to stop). So ``disconnect`` is asked on a worker
+    (:func:`_bounded`) and the interface is kept, with a reference the interpreter never drops
+    (not even when it clears modules at exit); the operating system reclaims the rest with
+    the process."""
     _ABANDONED.append(interface)
     ctypes.pythonapi.Py_IncRef(ctypes.py_object(interface))
+
+
+def exit_process_if_abandoned(code: int) -> None:
+    """For a command line program: end the process now with ``code`` (output flushed) if an
+    interface was abandoned (:func:`_abandon`), before the interpreter and the C++ runtime tear
+    down: ur_rtde's threads for a silent controller abort that teardown (``terminate called
+    without an active exception``, exit -6) even when the interface is never destroyed. A
+    program that goes on after a silent controller keeps the abandoned interfaces instead."""
+    if _ABANDONED:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
 
 
 @dataclass(frozen=True)
