@@ -57,6 +57,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "ftcomp.cli.payload",
         "write a calibration's tool mass and centre of gravity to a UR controller",
     ),
+    "ros2": ("ftcomp.cli.ros2", "ROS 2: gravity compensation as a node (ftcomp ros2 node)"),
     "calibrate-dynamic": (
         "ftcomp.cli.calibrate_dynamic",
         "identify the tool's inertia tensor from a recorded fast excitation trajectory",
