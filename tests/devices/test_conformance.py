@@ -8,10 +8,13 @@ For each pair the registry (:mod:`ftcomp.hardware.devices`) declares, against ``
   13 identified numbers each within its family bound of the twin's truth, and the 12
   parameters jointly (their Mahalanobis distance through the fit's covariance, F(12, 42));
 - ``stream`` with that calibration: a whole log whose contact wrench is the noise around zero;
-- ``run`` sets a 0.5 kg load down on the sponge and on the book gently (the twin's contact
-  log: never pressed beyond the weight by more than 0.3 N, the surface carrying it all within
-  0.05 N at the end, no safety stop);
-- each fault a face declares, injected by the twin, ends ``run`` as the declaration says
+- ``run`` sets a 0.5 kg load down on the sponge gently (the twin's contact log: never pressed
+  beyond the weight by more than 0.3 N, the surface carrying it all within 0.05 N at the end,
+  no safety stop), and on the book (stiff: the robot's servo is what it tests) with each robot
+  face and the first sensor face;
+- each fault a face declares (a robot face's run with the first sensor face, a sensor face's
+  with the first robot face: each fault once), injected by the twin, ends ``run`` as the
+  declaration says
   (its message, exit 1, "the robot was stopped", within ``seen_within_s`` of the fault), or
   leaves it running to its end; the log whole either way.
 
@@ -72,12 +75,23 @@ def _pairs() -> list[Any]:
     return pairs
 
 
+def _first(kind: str) -> str:
+    """The first face of a kind (the registry's order): the partner a face's own faults and
+    the book placement are run with."""
+    return next(iter(twin_faces(kind)))  # type: ignore[arg-type]
+
+
 def _faults() -> list[Any]:
+    """Each face's faults once: a robot face's with the first sensor face, a sensor face's with
+    the first robot face (a fault is its face's; the partner only carries the session)."""
     cases = []
+    first_robot, first_sensor = _first("robot"), _first("sensor")
     for pair in _pairs():
         robot, sensor = pair.values[0]
+        faces = [d for d, first in ((robot, first_sensor == sensor.twin.name),
+                                    (sensor, first_robot == robot.twin.name)) if first]  # fmt: skip
         seen: set[str] = set()
-        for device in (robot, sensor):
+        for device in faces:
             for fault in device.twin.faults:
                 if fault.name not in seen:
                     seen.add(fault.name)
@@ -218,6 +232,8 @@ def test_run_sets_a_half_kilogram_load_down_gently(
     session: dict, surface: str, tmp_path: Path
 ) -> None:
     pair, calibration = session["pair"], session["files"]["cal.json"]
+    if surface == "book" and pair[1].twin.name != _first("sensor"):
+        pytest.skip("the book (stiff contact: the robot's servo) with the first sensor face only")
     contact, log = tmp_path / "contact.csv", tmp_path / "run.csv"
     options = ("--load-kg", "0.5", "--surface", surface, "--clearance-mm", "2", TILT)
     name = f"conformance_{surface}_{pair[0].scheme}_{pair[1].scheme}"
@@ -253,8 +269,12 @@ def test_run_sets_a_half_kilogram_load_down_gently(
     assert np.all(np.abs(lateral - reported) <= 0.25), (lateral, reported)
 
 
-FAULT_AT_S = 0.5
-SECONDS = 3.0
+#: The fault comes this long after the robot's first client started streaming [s]: ``run``'s
+#: loop must be running by then (it connects, opens the sensor and enters its clock after its
+#: robot's stream starts: on a loaded host that took more than 0.5 s, and a fault before the
+#: loop's first cycle tests nothing).
+FAULT_AT_S = 1.5
+SECONDS = 4.0
 #: ``run``'s stale limit (its default) for a fast sensor; a sensor slower than 1 kHz (an FT 300
 #: at 100 Hz) is run as docs/hardware.md tells its users: the limit plus two of its periods,
 #: since its newest reading is up to one period old by design and one late reading (a stall of

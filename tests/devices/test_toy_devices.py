@@ -78,12 +78,16 @@ def test_the_conformance_suite_runs_every_pair_and_the_toy_pair_passes(
     ids = set(re.findall(r"\[([^\]]+)\]", collected.stdout))
     for pair in ("ur5e-netft", "ur5e-toyft", "toybot-netft", "toybot-toyft"):
         assert any(i.startswith(pair) for i in ids), (pair, collected.stdout[-2000:])
-    assert "toybot-toyft-toyft-silent" in ids and "toybot-netft-rdt-loss" in ids
+    # each face's faults once: the toy sensor's with the first robot face, the toy arm's with
+    # the first sensor face
+    assert "ur5e-toyft-toyft-silent" in ids and "toybot-netft-toybot-silent" in ids
+    assert "toybot-toyft-toyft-silent" not in ids
     run = subprocess.run(
         [sys.executable, "-m", "pytest", suite, "-q", "-p", "no:cacheprovider", "-k",
-         "toybot-toyft"],
+         "toybot-toyft or ur5e-toyft-toyft-silent or toybot-netft-toybot-silent"],
         capture_output=True, text=True, env=env, timeout=600, check=False, cwd=HERE.parent.parent,
     )  # fmt: skip
     assert run.returncode == 0, run.stdout[-6000:] + run.stderr[-2000:]
-    # record and calibrate, stream, two placements, the two faces' faults
-    assert re.search(r"\b6 passed\b", run.stdout), run.stdout[-2000:]
+    # record and calibrate, stream, the sponge placement (the book's is the first sensor
+    # face's), the two faces' faults (each with its partner above)
+    assert re.search(r"\b5 passed, 1 skipped\b", run.stdout), run.stdout[-2000:]
