@@ -101,7 +101,7 @@ def test_dynamic_calibration_round_trips_and_needs_force(tmp_path) -> None:
     path = tmp_path / "dynamic.json"
     save_dynamic(path, dyn, overwrite=False)
     np.testing.assert_allclose(load_dynamic(path), dyn.inertia_cog_kgm2, rtol=1e-12)
-    with pytest.raises(Exception, match="force"):
+    with pytest.raises(Exception, match="overwrite=True"):
         save_dynamic(path, dyn, overwrite=False)
     path.write_text(json.dumps({"inertia_cog_kgm2": {"Ixx": 1.0}}))
     with pytest.raises(CalibrationFileError, match="Iyy"):

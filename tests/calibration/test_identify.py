@@ -250,7 +250,7 @@ def test_a_recording_in_motion_without_pose_ids_points_to_still_segments(rng) ->
     with pytest.raises(
         IdentificationError,
         match=r"rec.csv: no 'pose' column, and the orientation changes from row to row "
-        r"\(2000 orientations in 2000 rows.*still-segment detection",
+        r"\(2000 orientations in 2000 rows.*still_segments",
     ):
         calibrate(samples)
 

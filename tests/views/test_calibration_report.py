@@ -40,7 +40,9 @@ def test_the_paper_data_report_shows_parameters_poses_and_what_would_help(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     report = tmp_path / "cal.html"
-    assert main(["calibrate", data_path(), "--report", str(report)]) == 0
+    assert (
+        main(["calibrate", data_path(), "--sensor-map", "physical", "--report", str(report)]) == 0
+    )
     assert f"report written to {report}" in capsys.readouterr().out.replace("\n", "")
     text = report.read_text()
     for words in ("tool weight G", "3.1537 ± 0.0219", "leave-one-out", "largest uncovered"):

@@ -133,8 +133,14 @@ def check_ros_name(kind: str, value: str, rule: str = "frame") -> str:
 
 
 def yaml_string(value: str) -> str:
-    """``value`` double-quoted, so every YAML parser (1.1 or 1.2) reads it as that string."""
-    return json.dumps(value, ensure_ascii=True)
+    """``value`` double-quoted, so every YAML parser (1.1 or 1.2) reads it as that string: a
+    printable character as itself, any other escaped by its code point (``\\uXXXX``, or
+    ``\\UXXXXXXXX`` beyond the BMP: YAML reads a JSON-style surrogate pair as two characters)."""
+    quoted = json.dumps(value, ensure_ascii=False)
+    return "".join(
+        c if c.isprintable() else (f"\\u{ord(c):04x}" if ord(c) <= 0xFFFF else f"\\U{ord(c):08x}")
+        for c in quoted
+    )
 
 
 def ros2_control_parameters(
