@@ -137,12 +137,13 @@ class Device:
     twin: TwinFace | None = None
 
 
-def _pending(face: TwinFace) -> None:
+def _pending(face: TwinFace) -> TwinFace | None:
     """A twin face written and declared, not yet registered (so the twin does not offer it and
     the conformance suite does not run it): its device conformance has not yet passed on a
     quiet host (issue 36: the FT 300's 100 Hz stream aged past run's stale limit at start on a
     loaded one). Registering it is replacing ``_pending(face)`` by ``face``."""
     del face
+    return None
 
 
 _NOT_ON_A_TWIN: Final = "no twin face: a file, a fixed pose or the simulated cell itself"
