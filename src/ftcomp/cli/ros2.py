@@ -13,7 +13,6 @@ Runs until Ctrl-C (or ``--seconds``).
 from __future__ import annotations
 
 import argparse
-import threading
 from typing import Any
 
 __all__ = ["register"]
@@ -79,5 +78,5 @@ def run(args: argparse.Namespace) -> int:
             f"-> ~/wrench_compensated, ~/wrench_contact_base (Ctrl-C stops)",
             flush=True,
         )
-        threading.Event().wait(args.seconds)
+        node.serve(args.seconds)
     return 0

@@ -135,6 +135,10 @@ class CompensationNode:
     def __exit__(self, *exc: object) -> None:
         self.runtime.__exit__(None, None, None)
 
+    def serve(self, seconds: float | None = None) -> None:
+        """Serve (its executor runs on its own thread) for ``seconds``, or until Ctrl-C."""
+        threading.Event().wait(seconds)
+
     def _parameters(self, runtime: Ros2Runtime) -> NodeConfig:
         """The config from the node's parameters, declared with the given config's values."""
         node = runtime.node
