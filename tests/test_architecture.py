@@ -44,6 +44,7 @@ LAYERS: dict[str, int] = {
     "ftcomp.extras": 1,
     "ftcomp.frames": 1,
     "ftcomp.kinematics": 1,
+    "ftcomp.lazy": 1,
     "ftcomp.model": 1,
     "ftcomp.samples": 1,
     # 2. file formats, device protocols and backends

@@ -9,8 +9,9 @@ needs (``--help`` and the device registry load no numpy or scipy through here).
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ftcomp.lazy import lazy_exports
 
 if TYPE_CHECKING:
     from ftcomp.control.controller import (
@@ -89,7 +90,4 @@ _WHERE = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _WHERE:
-        raise AttributeError(f"module 'ftcomp.control' has no attribute {name!r}")
-    return getattr(importlib.import_module(_WHERE[name]), name)
+__getattr__ = lazy_exports(__name__, _WHERE)

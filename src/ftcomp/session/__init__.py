@@ -23,8 +23,9 @@ build its options) does not load every session's dependencies.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ftcomp.lazy import lazy_exports
 
 if TYPE_CHECKING:
     from ftcomp.session.compensate_file import (
@@ -135,7 +136,4 @@ _WHERE = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _WHERE:
-        raise AttributeError(f"module 'ftcomp.session' has no attribute {name!r}")
-    return getattr(importlib.import_module(_WHERE[name]), name)
+__getattr__ = lazy_exports(__name__, _WHERE)

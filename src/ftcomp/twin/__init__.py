@@ -9,8 +9,7 @@ import :mod:`ftcomp.twin.netft` without MuJoCo.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ftcomp.lazy import lazy_exports
 
 __all__ = [
     "PROTECTIVE_STOP_FORCE_N",
@@ -43,7 +42,4 @@ _WHERE = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _WHERE:
-        raise AttributeError(f"module 'ftcomp.twin' has no attribute {name!r}")
-    return getattr(importlib.import_module(_WHERE[name]), name)
+__getattr__ = lazy_exports(__name__, _WHERE)
