@@ -243,10 +243,8 @@ def test_run_sets_a_half_kilogram_load_down_gently(
             "-c", str(calibration), "--control", "admittance", "--axes", "z",
             *GAINS[surface], "--settle-band-N", "0.03", "--seconds", "30",
             "--max-late-cycles", "50",  # a shared CI host: the client process is not real-time
-            # nor is the twin, hardware's stand-in, on the same two cores: readings 18-19 ms
-            # old were seen in runs that passed, one 20 ms stopped a CI run. A stale sensor's
-            # stop at 20 ms is tested with the faults below (rdt-loss, network-loss).
-            "--stale-ms", "50",
+            # nor is the twin, hardware's stand-in, on the same two cores (HOST_STALE_MS).
+            "--stale-ms", f"{HOST_STALE_MS:g}",
             "-o", str(log),
         )  # fmt: skip
     assert done.returncode == 0, done.stdout + done.stderr + twin.output()
@@ -275,14 +273,25 @@ def test_run_sets_a_half_kilogram_load_down_gently(
 #: loop's first cycle tests nothing).
 FAULT_AT_S = 3.0
 SECONDS = 5.5
-#: ``run``'s stale limit (its default) for a fast sensor; a sensor slower than 1 kHz (an FT 300
-#: at 100 Hz) is run as docs/hardware.md tells its users: the limit plus two of its periods,
-#: since its newest reading is up to one period old by design and one late reading (a stall of
-#: the twin or the client on a shared host) is no fault of the sensor's.
-STALE_MS = 20.0
+#: ``run``'s stale limit for a fast sensor in the fault runs [ms]: not its default (20 ms). The
+#: twin, hardware's stand-in, shares the test host's two cores with ``run`` and pytest, and a
+#: Python cell at 500 Hz is held off now and then: its stream had gaps of 20 ms on a quiet
+#: host (a sensor-fault run stopped on stale_sample 0.15 s in, before its fault) and of 54 ms
+#: on CI's slower machine (a placement stopped at 50 ms). A real sensor's clock does not
+#: stall with its host's; the stale check at the default limit is unit-tested on a
+#: controlled clock (tests/control/test_safety.py) and here stops the stream-loss faults
+#: (rdt-loss, network-loss) within their ``seen_within_s``.
+STALE_MS = 50.0
+#: The stale limit of the placements [ms]: they test the settling, not the stale check, and
+#: run 10 s under the twin, so a longer stall of the stand-in is likelier there.
+HOST_STALE_MS = 100.0
 
 
 def _stale_ms(sensor: Device) -> float:
+    """The fault runs' stale limit: :data:`STALE_MS`; a sensor slower than 1 kHz (an FT 300 at
+    100 Hz) as docs/hardware.md tells its users, the limit plus two of its periods, since its
+    newest reading is up to one period old by design and one late reading is no fault of the
+    sensor's."""
     rate_hz = sensor.twin.rate_hz if sensor.twin is not None else None
     return STALE_MS if rate_hz is None or rate_hz >= 1000.0 else STALE_MS + 2000.0 / rate_hz
 

@@ -103,7 +103,11 @@ def test_a_moveL_that_a_joint_limit_holds_ends_the_program_as_a_ur_controller_do
     from ftcomp.hardware.registry import open_robot
 
     turn = matrix_from_rotvec([0.0, 0.0, math.radians(170.0)])
-    with running_twin("test_moveL_held", seconds=60.0) as twin, open_robot(twin.robot_uri) as robot:
+    fast = "?max_speed_mm_s=250&max_accel_mm_s2=1500"  # 1 rad/s: three 170 deg turns in 9 s
+    with (
+        running_twin("test_moveL_held", seconds=60.0) as twin,
+        open_robot(twin.robot_uri + fast) as robot,
+    ):
         here = robot.pose()
         R = here.R_base_tcp @ turn
         robot.move_pose(here.p_base_tcp, R, 1.0)

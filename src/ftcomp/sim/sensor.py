@@ -25,13 +25,14 @@ import collections
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ftcomp import paper
-from ftcomp.arrays import freeze_field
+from ftcomp.arrays import freeze_field, frozen_array
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import NothingToClose, WrenchSample
 
@@ -181,34 +182,33 @@ class SensorSpec:
         """The same sensor with zero bias."""
         return replace(self, force_bias_N=np.zeros(3), torque_bias_Nm=np.zeros(3))
 
-    @property
+    # The per-axis vectors are computed once (a spec is frozen): the sensor model reads them
+    # on every conversion, and rebuilding them there was most of the twin's step.
+    @cached_property
     def range_6(self) -> NDArray[np.float64]:
         """Measuring range per axis ``[F, F, F, M, M, M]``, shape (6,)."""
-        return np.repeat([self.force_range_N, self.torque_range_Nm], 3)
+        return frozen_array(np.repeat([self.force_range_N, self.torque_range_Nm], 3))
 
-    @property
+    @cached_property
     def step_6(self) -> NDArray[np.float64]:
         """Quantisation step per axis, shape (6,) (zeros: no quantisation)."""
-        return self.range_6 * self.resolution_fraction_of_range
+        return frozen_array(self.range_6 * self.resolution_fraction_of_range)
 
-    @property
+    @cached_property
     def noise_std_6(self) -> NDArray[np.float64]:
         """Noise standard deviation per axis, shape (6,)."""
-        return np.repeat([self.force_noise_std_N, self.torque_noise_std_Nm], 3)
+        return frozen_array(np.repeat([self.force_noise_std_N, self.torque_noise_std_Nm], 3))
 
-    @property
+    @cached_property
     def overload_6(self) -> NDArray[np.float64]:
         """Overload limit per axis, shape (6,)."""
-        return (
-            self.range_6
-            * np.repeat([self.overload_force_percent, self.overload_torque_percent], 3)
-            / 100.0
-        )
+        percent = np.repeat([self.overload_force_percent, self.overload_torque_percent], 3)
+        return frozen_array(self.range_6 * percent / 100.0)
 
-    @property
+    @cached_property
     def bias_6(self) -> NDArray[np.float64]:
         """``[F0, M0]``, shape (6,)."""
-        return np.concatenate([self.force_bias_N, self.torque_bias_Nm])
+        return frozen_array(np.concatenate([self.force_bias_N, self.torque_bias_Nm]))
 
     def apply(
         self, ideal_wrench: ArrayLike, standard_normal: ArrayLike
