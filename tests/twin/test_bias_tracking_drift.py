@@ -6,9 +6,9 @@ A stand-in for "10 minutes after the session": the twin keeps real time, so the 
 10-35 s after the recording ends, at the steepest part of the warm-up, which here runs at twice
 the realistic rate (the sensor is switched on with the twin: 0.0051 N/s in z, twice the
 realistic 0.0026 N/s; ``SensorSpec.realistic_drift`` times 2): the bias moves as far in 10 s
-as a real one's in 20, and the suite waits 10 s less. The offline test (tests/compensation/test_bias_tracking.py)
-covers the full 10 minutes. Then the same calibration with a re-bias at the start
-(``--rebias-s``)."""
+as a real one's in 20, and the suite waits 10 s less. The offline test
+(tests/compensation/test_bias_tracking.py) covers the full 10 minutes. Then the same
+calibration with a re-bias at the start (``--rebias-s``)."""
 
 from __future__ import annotations
 
