@@ -1,15 +1,16 @@
 """ROS 2 nodes for the live tests, each in its own process, written with rclpy alone.
 
 ``python rclpy_peer.py publish SECONDS [FRAME] [--description] [--still] [--nan]
-[--joints-s=S]``: node
-``sensor_driver``
-publishing ``/ft_raw`` (WrenchStamped, reliable, 200 Hz; reading k is
+[--joints-s=S] [--load=KG --grasp-when=PATH]``: node ``sensor_driver`` publishing ``/ft_raw``
+(WrenchStamped, reliable, 200 Hz; reading k is
 ``MODEL.predict(R_BASE_SENSOR) + contact(k)`` stamped ``EPOCH_NS + k * 5 ms`` in FRAME, default
 ``ft_sensor``) and ``/joint_states`` (JointState, 100 Hz, :data:`Q` on the two joints of
 :data:`URDF`); with ``--description``, also ``/robot_description`` latched (transient local),
 as robot_state_publisher does; with ``--still``, the tool at rest with the bias moved by
 :data:`SHIFT` instead of a contact; with ``--nan``, every odd reading's fz is NaN; with
-``--joints-s=S``, the joint states stop after S seconds (the wrenches go on).
+``--joints-s=S``, the joint states stop after S seconds (the wrenches go on); with
+``--load=KG``, the tool at rest (no contact) and, from the first reading after the file PATH
+exists, a grasped load of KG at :data:`LOAD_COG_M` (:func:`load_wrench`).
 
 ``python rclpy_peer.py subscribe TOPIC COUNT SECONDS OUT.json``: node ``listener`` collecting
 WrenchStamped on TOPIC until COUNT messages or SECONDS passed; writes
@@ -86,6 +87,24 @@ R_BASE_SENSOR = (
 
 #: With ``--still``, every reading is the tool at rest with the bias moved by this [N, N*m].
 SHIFT = np.array([0.3, -0.2, 0.5, 0.01, 0.02, -0.03])
+#: With ``--load``: the grasped load's centre of gravity [m], sensor frame.
+LOAD_COG_M = np.array([0.01, -0.02, 0.12])
+
+
+def load_wrench(mass_kg: float) -> np.ndarray:
+    """The wrench [N, N*m] a load of ``mass_kg`` at :data:`LOAD_COG_M` adds at
+    :data:`R_BASE_SENSOR` (no bias: the load's gravity alone, the tool's tilted base)."""
+    from ftcomp.constants import STANDARD_GRAVITY_MPS2
+
+    load = GravityModel(
+        mass_kg * STANDARD_GRAVITY_MPS2,
+        LOAD_COG_M,
+        np.zeros(3),
+        np.zeros(3),
+        tilt_U_rad=MODEL.tilt_U_rad,
+        tilt_V_rad=MODEL.tilt_V_rad,
+    )
+    return np.asarray(load.predict(R_BASE_SENSOR.as_matrix()))
 
 
 def contact(k: int) -> np.ndarray:
@@ -98,7 +117,14 @@ def _stamp(msg_stamp: object, t_ns: int) -> None:
 
 
 def publish(
-    seconds: float, frame: str, description: bool, still: bool, nan: bool, joints_s: float
+    seconds: float,
+    frame: str,
+    description: bool,
+    still: bool,
+    nan: bool,
+    joints_s: float,
+    load_kg: float = 0.0,
+    grasp_when: str = "",
 ) -> None:
     node = Node("sensor_driver")
     reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
@@ -112,13 +138,19 @@ def publish(
         )
         node.create_publisher(String, "/robot_description", latched).publish(String(data=URDF))
     predicted = MODEL.predict(R_BASE_SENSOR.as_matrix())
+    loaded = predicted + load_wrench(load_kg)
+    held = False
     end = time.monotonic() + seconds
     k = 0
     while time.monotonic() < end:
         msg = WrenchStamped()
         _stamp(msg.header.stamp, EPOCH_NS + k * PERIOD_NS)
         msg.header.frame_id = frame
-        w = (predicted + (SHIFT if still else contact(k))).tolist()
+        if load_kg:
+            held = held or os.path.exists(grasp_when)
+            w = (loaded if held else predicted).tolist()
+        else:
+            w = (predicted + (SHIFT if still else contact(k))).tolist()
         if nan and k % 2:
             w[2] = float("nan")
         f, m = msg.wrench.force, msg.wrench.torque
@@ -253,6 +285,8 @@ if __name__ == "__main__":
                 "--still" in flags,
                 "--nan" in flags,
                 float(next((f.split("=")[1] for f in flags if f.startswith("--joints-s=")), "inf")),
+                float(next((f.split("=")[1] for f in flags if f.startswith("--load=")), "0")),
+                next((f.split("=", 1)[1] for f in flags if f.startswith("--grasp-when=")), ""),
             )
         elif mode == "robot":
             robot(float(sys.argv[2]), sys.argv[3])

@@ -1,10 +1,14 @@
 """``ftcomp ros2 node``: run gravity compensation as a ROS 2 node (docs/ros2.md).
 
 ``ftcomp ros2 node --calibration calibration.json --base-frame base_link --sensor-frame ft_sensor
---wrench-topic /ft_sensor/wrench [--urdf robot.urdf] [--ros-args -p name:=value ...]``
+--wrench-topic /ft_sensor/wrench [--urdf robot.urdf] [--online-load] [--ros-args -p name:=value
+...]``
 
 Publishes ``~/wrench_compensated`` (sensor frame) and ``~/wrench_contact_base`` (base frame)
-with each raw reading's stamp; services ``~/rebias`` and ``~/reload_calibration``
+with each raw reading's stamp; with ``--online-load`` it weighs a grasped load, compensates it
+once the estimate converged and publishes ``~/load`` (geometry_msgs/InertiaStamped: mass [kg],
+centre of gravity [m], sensor frame) and ``~/load_state`` (std_msgs/String: empty, estimating,
+holding); services ``~/rebias`` and ``~/reload_calibration``
 (std_srvs/Trigger); says on ``/diagnostics`` why a reading was not compensated. Every setting is
 also a ROS 2 parameter of the node (``-p calibration_file:=...``; a ``-p`` wins over the option).
 Runs until Ctrl-C (or ``--seconds``).
@@ -48,6 +52,13 @@ def register(parser: argparse.ArgumentParser) -> None:
     add_field_option(node, NodeConfig, "wrench_qos")
     for name in _NUMBERS:
         add_field_option(node, NodeConfig, name, metavar="S")
+    node.add_argument(
+        "--online-load",
+        action="store_true",
+        default=None,
+        help="weigh a grasped load online, compensate it and publish ~/load and ~/load_state "
+        "(the readings' rate measured from their first 0.5 s of stamps; default: off)",
+    )
     node.add_argument("--name", default="ftcomp", help="the node's name (default ftcomp)")
     add_field_option(node, RUN_FOR, "seconds", "--seconds", none_means="until Ctrl-C")
     node.add_argument(
@@ -66,16 +77,17 @@ def run(args: argparse.Namespace) -> int:
 
     settings: dict[str, Any] = {
         name: getattr(args, name)
-        for name in (*_TEXT, "wrench_qos", *_NUMBERS)
+        for name in (*_TEXT, "wrench_qos", *_NUMBERS, "online_load")
         if getattr(args, name) is not None
     }
     arguments = ["--ros-args", *args.ros_args] if args.ros_args is not None else []
     with CompensationNode(settings, node_name=args.name, arguments=arguments) as node:
         config = node.config
         assert config is not None
+        load = ", ~/load, ~/load_state" if config.online_load else ""
         print(
             f"node {args.name}: {config.wrench_topic} compensated with {config.calibration_file} "
-            f"-> ~/wrench_compensated, ~/wrench_contact_base (Ctrl-C stops)",
+            f"-> ~/wrench_compensated, ~/wrench_contact_base{load} (Ctrl-C stops)",
             flush=True,
         )
         node.serve(args.seconds)

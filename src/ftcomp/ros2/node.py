@@ -10,6 +10,16 @@ For each raw reading it publishes, with the reading's own ``header.stamp``:
 - ``~/wrench_contact_base``: the same wrench in the base frame's orientation (force and torque
   rotated by ``R_base_sensor``; the torque still about the sensor origin), ``frame_id`` the base.
 
+With ``online_load`` a grasped load is weighed online
+(:class:`~ftcomp.compensation.pipeline.WrenchPipeline`, the
+:class:`~ftcomp.compensation.online.OnlineLoadCompensator` of ``stream --online-load``) and,
+once its estimate has converged, compensated too; the node publishes ``~/load``
+(``geometry_msgs/InertiaStamped``: the mass [kg] and centre of gravity [m] in the sensor frame,
+the inertia tensor zero: not estimated; each state change and every :data:`LOAD_PERIOD_NS` of
+readings) and ``~/load_state`` (``std_msgs/String``, latched: ``empty``, ``estimating``,
+``holding``). The estimator's rate is measured from the stamps of the first 0.5 s of readings,
+which are held back and published, in order and with their stamps, once it is known.
+
 Services (``std_srvs/Trigger``): ``~/rebias`` re-estimates the bias from ``rebias_s`` of readings
 with the arm still and nothing touching the tool (:func:`~ftcomp.calibration.rebias.rebias`);
 ``~/reload_calibration`` reads ``calibration_file`` again. Both answer ``success`` and a line.
@@ -38,34 +48,47 @@ from numpy.typing import NDArray
 from ftcomp.calibration.rebias import rebias
 from ftcomp.calibration_record import Calibration
 from ftcomp.compensation.compensator import GravityCompensator
+from ftcomp.compensation.online import LOAD_STATE_CODES
+from ftcomp.compensation.pipeline import WrenchPipeline
 from ftcomp.errors import FtcompError, HardwareError, ParameterError
 from ftcomp.io.calibration_json import load_calibration
 from ftcomp.ros2.live import JointStatePose, robot_description, urdf_chain, wait_for
 from ftcomp.ros2.node_config import NodeConfig
 from ftcomp.ros2.rclpy_runtime import (
     DEFAULT_QOS,
+    DESCRIPTION_QOS,
     STREAM_QOS,
     DiagnosticArray,
     DiagnosticStatus,
+    InertiaStamped,
     JointState,
     KeyValue,
     ReentrantCallbackGroup,
     Ros2Runtime,
+    String,
     Trigger,
     WrenchStamped,
     qos_profile,
     received_ns,
+    stamp_msg,
+    stamp_ns,
     wrench_of,
 )
 from ftcomp.ros2.tf import clean_frame
 from ftcomp.samples import Samples
 
-__all__ = ["MOVED_M", "TURNED_RAD", "CompensationNode"]
+__all__ = ["LOAD_PERIOD_NS", "MOVED_M", "TURNED_RAD", "CompensationNode"]
 
 #: How far the sensor may move [m] and turn [rad] while ``~/rebias`` reads: further, the arm
 #: was not still (the same bounds as ``--rebias-s``).
 MOVED_M = 1e-3
 TURNED_RAD = 0.005
+#: ``~/load`` is published at each change of the estimate's state and, between them, once per
+#: this span of the readings' stamps [ns] (10 Hz: a payload does not change faster, and the
+#: wrench topics already carry the sensor's rate).
+LOAD_PERIOD_NS = 100_000_000
+#: ``~/load_state``'s words for the estimate's states (the log's ``load_state`` codes).
+_STATE_WORDS = {code: state.value for state, code in LOAD_STATE_CODES.items()}
 
 
 @dataclass
@@ -76,6 +99,7 @@ class _Status:
     message: str
     published: int = 0
     dropped: int = 0
+    load: tuple[float, ...] = ()
 
 
 class CompensationNode:
@@ -110,6 +134,8 @@ class CompensationNode:
         self.config: NodeConfig | None = None
         self._lock = threading.Lock()
         self._compensator: GravityCompensator | None = None
+        self._pipeline: WrenchPipeline | None = None  # with online_load
+        self._load_state, self._load_sent_ns = -1, 0
         self._calibration: Calibration | None = None
         self._R_rec_sensor_T: NDArray[np.float64] | None = None
         self._pose: JointStatePose | None = None
@@ -121,6 +147,8 @@ class CompensationNode:
         self._pub_sensor: Any = None
         self._pub_base: Any = None
         self._pub_diag: Any = None
+        self._pub_load: Any = None
+        self._pub_load_state: Any = None
 
     # ----------------------------------------------------------------- start and stop
     def __enter__(self) -> CompensationNode:
@@ -146,12 +174,24 @@ class CompensationNode:
         for f in fields(NodeConfig):
             given = self._given.get(f.name)
             if given is None:
-                given = f.default if isinstance(f.default, (str, float)) else ""
-            default: float | str = float(given) if isinstance(given, float) else str(given)
+                given = f.default if isinstance(f.default, (str, float, bool)) else ""
+            default: bool | float | str = (
+                given
+                if isinstance(given, bool)
+                else float(given)
+                if isinstance(given, float)
+                else str(given)
+            )
             try:
                 values[f.name] = node.declare_parameter(f.name, default).value
             except Exception as exc:  # rclpy's: an override of another type
-                kind = "a number" if isinstance(default, float) else "a string"
+                kind = (
+                    "true or false"
+                    if isinstance(default, bool)
+                    else "a number"
+                    if isinstance(default, float)
+                    else "a string"
+                )
                 raise ParameterError(
                     f"ROS parameter {f.name} must be {kind} ({type(exc).__name__})", field=f.name
                 ) from None
@@ -192,6 +232,11 @@ class CompensationNode:
         self._pub_sensor = node.create_publisher(WrenchStamped, "~/wrench_compensated", STREAM_QOS)
         self._pub_base = node.create_publisher(WrenchStamped, "~/wrench_contact_base", STREAM_QOS)
         self._pub_diag = node.create_publisher(DiagnosticArray, "/diagnostics", DEFAULT_QOS)
+        if config.online_load:
+            self._out_load = InertiaStamped()
+            self._out_load.header.frame_id = config.sensor_frame
+            self._pub_load = node.create_publisher(InertiaStamped, "~/load", DEFAULT_QOS)
+            self._pub_load_state = node.create_publisher(String, "~/load_state", DESCRIPTION_QOS)
         services = ReentrantCallbackGroup()  # a rebias reads for seconds, beside the readings
         node.create_service(Trigger, "~/rebias", self._on_rebias, callback_group=services)
         node.create_service(
@@ -205,12 +250,26 @@ class CompensationNode:
 
     def _load(self, path: str) -> Calibration:
         calibration = load_calibration(path)
+        self._use(calibration)
+        return calibration
+
+    def _use(self, calibration: Calibration) -> None:
+        """Compensate with ``calibration`` from the next reading on (with ``online_load``, a
+        new estimate: a load held is weighed again once the gripper next grasps one).
+
+        Raises:
+            ParameterError: with ``online_load``, a calibration without the tool's weight.
+        """
         compensator = GravityCompensator(calibration)
+        pipeline = None
+        if self.config is not None and self.config.online_load:
+            known = self._pipeline.rate_Hz if self._pipeline is not None else math.nan
+            pipeline = WrenchPipeline.weighing(calibration, known if known > 0.0 else None)
         mount = calibration.mount
         with self._lock:
             self._calibration, self._compensator = calibration, compensator
+            self._pipeline = pipeline
             self._R_rec_sensor_T = None if mount is None else mount.R_rec_sensor.T.copy()
-        return calibration
 
     # ----------------------------------------------------------------- the readings
     def _on_wrench(self, msg: WrenchStamped, info: Mapping[str, Any]) -> None:
@@ -237,28 +296,63 @@ class CompensationNode:
             )
             return
         with self._lock:
-            compensator, R_T = self._compensator, self._R_rec_sensor_T
+            compensator, pipeline = self._compensator, self._pipeline
+            R_T = self._R_rec_sensor_T
             if self._collecting:
                 self._collect.append((wrench, R, p))
         self._end_collection(received)
         assert compensator is not None
         R_feed = R if R_T is None else R @ R_T  # a mount-identified calibration's frame
-        contact = compensator.compensate(wrench, R_feed)
         # Two messages made once and refilled (one reading at a time: the readings' callback
         # group is mutually exclusive; publish serialises at once): building a WrenchStamped
         # costs about 80 us, most of a reading's budget at 1 kHz (measured).
-        out, base = self._out_sensor, self._out_base
-        out.header.stamp = base.header.stamp = msg.header.stamp
+        out = self._out_sensor
         out.header.frame_id = msg.header.frame_id
+        if pipeline is None:
+            self._publish(stamp_ns(msg.header.stamp), compensator.compensate(wrench, R_feed), R)
+        else:  # each reading once, in order; the first held back while the rate is measured
+            pipeline.push(stamp_ns(msg.header.stamp), wrench, R_feed, p)
+            for c in pipeline.ready:
+                R_c = c.R_base_sensor if R_T is None else c.R_base_sensor @ R_T.T
+                self._publish(c.t_ns, c.wrench_contact_sensor, R_c)
+                self._publish_load(c.t_ns, c.load)
+            pipeline.ready.clear()
+        with self._lock:
+            back = self._status.level != DiagnosticStatus.OK
+        if back:
+            self._say(DiagnosticStatus.OK, "compensating")
+
+    def _publish(self, t_ns: int, contact: NDArray[np.float64], R: NDArray[np.float64]) -> None:
+        """One reading's contact wrench [N, N*m] on both topics, stamped ``t_ns`` [ns]."""
+        out, base = self._out_sensor, self._out_base
+        stamp_msg(out.header.stamp, t_ns)
+        stamp_msg(base.header.stamp, t_ns)
         _fill(out, contact)
         self._pub_sensor.publish(out)
         _fill(base, (R @ contact.reshape(2, 3).T).T.ravel())
         self._pub_base.publish(base)
         with self._lock:
             self._status.published += 1
-            back = self._status.level != DiagnosticStatus.OK
-        if back:
-            self._say(DiagnosticStatus.OK, "compensating")
+
+    def _publish_load(self, t_ns: int, load: tuple[float, ...]) -> None:
+        """The online estimate after a reading stamped ``t_ns`` [ns] (``load``: the
+        :data:`~ftcomp.compensation.online.LOAD_COLUMNS`): ``~/load_state`` when the state
+        changed, ``~/load`` then and every :data:`LOAD_PERIOD_NS`."""
+        state, mass_kg, mass_std_kg, cx, cy, cz = int(load[0]), *load[1:6]
+        changed = state != self._load_state
+        if not changed and t_ns - self._load_sent_ns < LOAD_PERIOD_NS:
+            return
+        self._load_state, self._load_sent_ns = state, t_ns
+        msg = self._out_load
+        stamp_msg(msg.header.stamp, t_ns)
+        msg.inertia.m = mass_kg
+        com = msg.inertia.com
+        com.x, com.y, com.z = (v if math.isfinite(v) else 0.0 for v in (cx, cy, cz))
+        self._pub_load.publish(msg)
+        if changed:
+            self._pub_load_state.publish(String(data=_STATE_WORDS[state]))
+        with self._lock:
+            self._status.load = (state, mass_kg, mass_std_kg)
 
     def _end_collection(self, now_ns: int, grace_ns: int = 0) -> None:
         """End a rebias's collection whose time is up (``grace_ns`` later)."""
@@ -301,6 +395,13 @@ class CompensationNode:
                     KeyValue(key="dropped", value=str(s.dropped)),
                 ],
             )
+            if s.load:
+                state, mass_kg, mass_std_kg = s.load
+                status.values += [
+                    KeyValue(key="load_state", value=_STATE_WORDS[int(state)]),
+                    KeyValue(key="load_kg", value=f"{mass_kg:.4f}"),
+                    KeyValue(key="load_kg_std", value=f"{mass_std_kg:.4f}"),
+                ]
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.runtime.node.get_clock().now().to_msg()
         self._pub_diag.publish(array)
@@ -348,8 +449,7 @@ class CompensationNode:
         shift = np.concatenate([new.model.force_bias_N, new.model.torque_bias_Nm]) - np.concatenate(
             [calibration.model.force_bias_N, calibration.model.torque_bias_Nm]
         )
-        with self._lock:
-            self._calibration, self._compensator = new, GravityCompensator(new)
+        self._use(new)
         response.success = True
         response.message = (
             f"re-biased from {len(got)} still readings: the bias moved by "

@@ -47,6 +47,9 @@ class NodeConfig:
         stale_s: joint states older than this [s] stop publishing.
         rebias_s: how long ``~/rebias`` reads [s].
         timeout_s: how long starting waits for the description and the joint states [s].
+        online_load: weigh a grasped load online, compensate it once its estimate converged
+            and publish the estimate (``~/load``, ``~/load_state``); the readings' rate is
+            measured from the stamps of their first 0.5 s.
     """
 
     calibration_file: str = param(help="the calibration (JSON)")
@@ -63,6 +66,7 @@ class NodeConfig:
     timeout_s: float = param(
         10.0, gt=0.0, unit="s", help="how long to wait for the description and joint states"
     )
+    online_load: bool = False
 
     def __post_init__(self) -> None:
         check_fields(self)

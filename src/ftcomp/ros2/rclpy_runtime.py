@@ -1,10 +1,11 @@
 """ftcomp's one ROS 2 runtime: rclpy, ROS 2's own Python client library.
 
 A sourced ROS 2 installation provides rclpy; on a machine without ROS the PyPI wheels do
-(``pip install 'ftcomp[ros2]'``: ``ros-rclpy[fastrtps]`` and the message packages, ROS 2 Kilted
-for CPython 3.11). Everything ``ros2://`` does goes through :class:`Ros2Runtime`: one rclpy
-context and one node of its own, spun by one executor thread, so several of them (the sensor, the
-robot, the compensation node) live side by side in one process and shut down independently.
+(``pip install -e '.[ros2]'`` in the clone: ``ros-rclpy[fastrtps]`` and the message packages,
+ROS 2 Kilted for CPython 3.11). Everything ``ros2://`` does goes through :class:`Ros2Runtime`:
+one rclpy context and one node of its own, spun by one executor thread, so several of them (the
+sensor, the robot, the compensation node) live side by side in one process and shut down
+independently.
 
 **Loopback.** ROS 2 discovers peers on every interface by default. :func:`loopback_environment`
 gives the environment that keeps a participant on 127.0.0.1: ``ROS_AUTOMATIC_DISCOVERY_RANGE=
@@ -33,12 +34,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.errors import HardwareError, ParameterError
+from ftcomp.extras import install_hint
 from ftcomp.ros2.node_config import QOS_CHOICES
 
 try:  # the optional extra, or a sourced ROS 2
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-    from geometry_msgs.msg import TwistStamped, WrenchStamped
+    from geometry_msgs.msg import InertiaStamped, TwistStamped, WrenchStamped
     from rclpy.callback_groups import ReentrantCallbackGroup
     from rclpy.context import Context
     from rclpy.executors import (
@@ -59,7 +61,7 @@ try:  # the optional extra, or a sourced ROS 2
     from std_srvs.srv import Trigger
 except ImportError as exc:
     raise HardwareError(
-        f"ros2:// needs rclpy: source a ROS 2 installation, or pip install 'ftcomp[ros2]' ({exc})"
+        f"ros2:// needs rclpy: source a ROS 2 installation, or {install_hint('ros2')} ({exc})"
     ) from None
 
 if TYPE_CHECKING:
@@ -72,6 +74,7 @@ __all__ = [
     "STREAM_QOS",
     "DiagnosticArray",
     "DiagnosticStatus",
+    "InertiaStamped",
     "JointState",
     "KeyValue",
     "ReentrantCallbackGroup",
