@@ -19,6 +19,11 @@ WrenchStamped on TOPIC until COUNT messages or SECONDS passed; writes
 ``python rclpy_peer.py robot SECONDS OUT.json``: node ``servo_robot``, a Cartesian arm
 (:data:`CARTESIAN_URDF`) integrating TwistStamped into joint states (:func:`robot`).
 
+``python rclpy_peer.py cell SECONDS OUT.json``: node ``servo_robot``, the simulated MuJoCo cell
+(:data:`CELL_URI`: 0.5 kg held 2 mm above the sponge) in wall-clock time, its wrist sensor on
+``/ft_sensor/wrench``, its joints on ``/joint_states``, its URDF latched on
+``/robot_description``, and the TwistStamped it receives as the cell's motion (:func:`cell`).
+
 ``python rclpy_peer.py rebias OUT.json``: node ``client`` calling ``/ftcomp/rebias``
 (std_srvs/Trigger), writing ``[success, message]``.
 
@@ -28,6 +33,7 @@ The environment (the test's) pins them to loopback and sets ROS_DOMAIN_ID.
 from __future__ import annotations
 
 import json
+import math
 import os
 import sys
 import time
@@ -271,6 +277,93 @@ def robot(seconds: float, out: str) -> None:
     node.destroy_node()
 
 
+#: The cell of ``tests/session/test_run.py``'s placement: 0.5 kg grasped, 2 mm above the sponge.
+CELL_URI = "sim://?seed=4&surface=sponge&load_kg=0.5&grasp=1&clearance_mm=2"
+
+
+def cell(seconds: float, out: str) -> None:
+    """Node ``servo_robot``: the simulated cell (:data:`CELL_URI`) driven by
+    ``/servo_node/delta_twist_cmds`` (TwistStamped, base frame, the sensor origin's twist; older
+    than 0.1 s counts as zero, Servo's time-out), kept in step with the wall clock: each turn
+    runs the cell's 1 ms cycles that are due (at most 50: a starved process slows the cell down
+    rather than jump) and publishes its sensor's newest reading (``/ft_sensor/wrench``, frame
+    ``ft_sensor``, stamped with ROS time) and its measured joints (``/joint_states``). Its URDF
+    (``simbag.urdf_of_cell``) is latched on ``/robot_description``, as robot_state_publisher
+    does. Ends after SECONDS, or once ``OUT.json.stop`` exists and the last twist received is
+    zero (at most 10 s later), writing the sensor's start and end position in the base frame
+    [m], the last twist, the count of twists and the cell's simulated and wall seconds."""
+    from geometry_msgs.msg import TwistStamped
+    from simbag import urdf_of_cell
+
+    import ftcomp
+
+    node = Node("servo_robot")
+    reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+    wrenches = node.create_publisher(WrenchStamped, "/ft_sensor/wrench", reliable)
+    joints = node.create_publisher(JointState, "/joint_states", reliable)
+    latest: list[object] = [np.zeros(6), 0.0, 0]
+
+    def on_twist(msg: TwistStamped) -> None:
+        v, w = msg.twist.linear, msg.twist.angular
+        latest[0] = np.array([v.x, v.y, v.z, w.x, w.y, w.z])
+        latest[1] = time.monotonic()
+        latest[2] = int(latest[2]) + 1  # type: ignore[call-overload]
+
+    node.create_subscription(TwistStamped, "/servo_node/delta_twist_cmds", on_twist, reliable)
+    with ftcomp.open_robot(CELL_URI) as robot, ftcomp.open_sensor("sim://", robot) as sensor:
+        latched = QoSProfile(
+            depth=1,
+            reliability=ReliabilityPolicy.RELIABLE,
+            durability=DurabilityPolicy.TRANSIENT_LOCAL,
+        )
+        description = node.create_publisher(String, "/robot_description", latched)
+        description.publish(String(data=urdf_of_cell(robot)))  # type: ignore[arg-type]
+        names = list(robot.joint_names)  # type: ignore[attr-defined]
+        start = robot.pose().p_base_tcp.tolist()
+        period = robot.control_period_s  # type: ignore[attr-defined]
+        t0 = time.monotonic()
+        steps = 0
+        stop, stop_by = out + ".stop", math.inf
+
+        def stopped() -> bool:
+            nonlocal stop_by
+            if stop_by == math.inf and os.path.exists(stop):
+                stop_by = time.monotonic() + 10.0
+            return not np.any(np.asarray(latest[0])) or time.monotonic() > stop_by
+
+        while time.monotonic() - t0 < seconds and not (os.path.exists(stop) and stopped()):
+            rclpy.spin_once(node, timeout_sec=0)
+            due = min(int((time.monotonic() - t0) / period) - steps, 50)
+            if due <= 0:
+                time.sleep(period / 2)
+                continue
+            fresh = time.monotonic() - float(latest[1]) < 0.1  # type: ignore[arg-type]
+            robot.command_twist(np.asarray(latest[0]) if fresh else np.zeros(6))
+            for _ in range(due):
+                robot.wait_cycle()
+            steps += due
+            msg = WrenchStamped()
+            _stamp(msg.header.stamp, time.time_ns())
+            msg.header.frame_id = "ft_sensor"
+            f, m = msg.wrench.force, msg.wrench.torque
+            f.x, f.y, f.z, m.x, m.y, m.z = sensor.read().wrench_sensor.tolist()
+            wrenches.publish(msg)
+            js = JointState(name=names, position=robot.q_rad.tolist())  # type: ignore[attr-defined]
+            _stamp(js.header.stamp, time.time_ns())
+            joints.publish(js)
+        state = {
+            "start": start,
+            "end": robot.pose().p_base_tcp.tolist(),
+            "last_twist": np.asarray(latest[0]).tolist(),
+            "twists": latest[2],
+            "sim_s": steps * period,
+            "wall_s": time.monotonic() - t0,
+        }
+    with open(out, "w", encoding="utf-8") as handle:
+        json.dump(state, handle)
+    node.destroy_node()
+
+
 if __name__ == "__main__":
     rclpy.init()
     try:
@@ -290,6 +383,8 @@ if __name__ == "__main__":
             )
         elif mode == "robot":
             robot(float(sys.argv[2]), sys.argv[3])
+        elif mode == "cell":
+            cell(float(sys.argv[2]), sys.argv[3])
         elif mode == "subscribe":
             subscribe(sys.argv[2], int(sys.argv[3]), float(sys.argv[4]), sys.argv[5])
         else:

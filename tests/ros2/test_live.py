@@ -189,7 +189,7 @@ def test_the_servo_robot_commands_twists_a_robot_node_integrates_and_stops_on_ex
     """``ros2://...&twist_topic=`` through ``run_loop`` against an rclpy "robot" node that
     integrates TwistStamped into joint states (a Cartesian arm): the arm moves as commanded,
     the pose read back through JointState + URDF is the robot node's own, and leaving the loop
-    sends a zero twist. Not yet the compliant placement on the simulated cell (docs/ros2.md)."""
+    sends a zero twist. The compliant placement through a ROS 2 graph is the next test's."""
     from rclpy_peer import CARTESIAN_URDF
 
     urdf, out = tmp_path / "cartesian.urdf", tmp_path / "robot.json"
@@ -243,3 +243,75 @@ def test_the_servo_robot_commands_twists_a_robot_node_integrates_and_stops_on_ex
     # The rotation was about base z only.
     R_delta = end.R_base_tcp @ start.R_base_tcp.T
     np.testing.assert_allclose(R_delta[2], [0.0, 0.0, 1.0], atol=1e-6)
+
+
+def test_ftcomp_run_places_the_load_on_the_sponge_through_a_ros2_graph(
+    ros2_graph: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``ftcomp run`` closes the admittance loop through a ROS 2 graph around the simulated
+    MuJoCo cell: an rclpy node (``rclpy_peer.py cell``) runs the cell holding 0.5 kg 2 mm above
+    the sponge in wall-clock time, publishes its wrist sensor's WrenchStamped, its JointState
+    and its URDF (latched /robot_description), and moves the cell by the TwistStamped it
+    receives; ``ftcomp run --sensor ros2://... --robot ros2://...&twist_topic=...`` lowers the
+    load until the sponge carries it (the placement of ``tests/session/test_run.py``)."""
+    import ftcomp
+    from ftcomp.cli import main
+    from ftcomp.io.calibration_json import FORMAT, model_to_dict
+
+    with ftcomp.open_robot("sim://?seed=4") as sim:  # the tool's truth: the calibration
+        tool = sim.true_gravity_model()  # type: ignore[attr-defined]
+    cal, log, out = tmp_path / "cal.json", tmp_path / "run.csv", tmp_path / "cell.json"
+    cal.write_text(json.dumps({"format": FORMAT, "method": "joint", **model_to_dict(tool)}))
+    cell = peer("cell", 150, out)
+    try:
+        code = main(
+            [
+                "run",
+                "-c",
+                str(cal),
+                "--control",
+                "admittance",
+                "--axes",
+                "z",
+                "--frame",
+                "base",
+                "--sensor",
+                f"ros2:///ft_sensor/wrench?frame=ft_sensor&qos=reliable{WAIT}",
+                "--robot",
+                "ros2:///?base_frame=base&tcp_frame=ft_sensor&rate_hz=250"
+                f"&twist_topic=/servo_node/delta_twist_cmds{WAIT}&stale_s=5",
+                # A host running a dozen processes starves one for tens of milliseconds (the
+                # watchdog's own tests are tests/control's); this one checks the placement.
+                "--stale-ms",
+                "500",
+                "--max-identical-samples",
+                "0",
+                "--settle-band-N",
+                "0.05",
+                "--seconds",
+                "30",
+                "-o",
+                str(log),
+            ]
+        )
+        Path(f"{out}.stop").write_text("")
+        cell.wait(timeout=60)
+    finally:
+        stop(cell)
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    assert "settled" in printed.out, printed.out
+    state = json.loads(out.read_text())
+    assert state["last_twist"] == [0.0] * 6  # the run ended with a zero twist
+    rows = list(csv.DictReader(log.open()))
+    p = np.array([[float(r[c]) for c in ("px", "py", "pz")] for r in rows])
+    travel_log = p[-1] - p[0]
+    travel_cell = np.array(state["end"]) - np.array(state["start"])
+    # Lowered by the 2 mm gap plus the sponge's give, straight down (test_run's bounds).
+    assert 2e-3 < -travel_log[2] < 10e-3
+    assert abs(travel_log[0]) < 1e-3 and abs(travel_log[1]) < 1e-3
+    # The travel run saw through JointState + URDF is the cell's own, but for what the cell did
+    # after run's last row: the settled command (K2 x band = 0.05 mm/s) until the zero twist,
+    # and its position-controlled joints giving under the sponge once the twists stop
+    # (measured: 0.08 mm in z).
+    np.testing.assert_allclose(travel_log, travel_cell, atol=2e-4)
