@@ -38,9 +38,10 @@ def _robot(kind: str, tmp_path: Path) -> Robot:
     if kind == "ur":
         pytest.importorskip("rtde_receive")
         return open_robot("ur://127.0.0.9")  # not entered: nothing connects
-    if kind == "ros2":
-        pytest.importorskip("cyclonedds")
-        return open_robot("ros2:///?base_frame=base&tcp_frame=tool0")
+    if kind in ("ros2", "ros2-servo"):
+        pytest.importorskip("rclpy")  # not entered: no participant starts
+        servo = "&twist_topic=/servo_node/delta_twist_cmds" if kind == "ros2-servo" else ""
+        return open_robot("ros2:///?base_frame=base&tcp_frame=tool0" + servo)
     if kind == "replay":
         return open_robot(_replay_file(tmp_path / "log.csv"))
     return open_robot(
@@ -57,6 +58,7 @@ def _robot(kind: str, tmp_path: Path) -> Robot:
         ("replay", set(), "replay", True),
         ("ur", {TakesControl, ReportsLateness, ChecksReachability}, "monotonic", True),
         ("ros2", set(), "monotonic", True),
+        ("ros2-servo", set(), "monotonic", True),
     ],
 )
 def test_each_robot_has_exactly_the_capabilities_it_declares(
@@ -78,7 +80,7 @@ def _sensor(kind: str, tmp_path: Path) -> WrenchSensor:
         pytest.importorskip("rtde_receive")
         return open_sensor("ur://127.0.0.9", open_robot("ur://127.0.0.9"))
     if kind == "ros2":
-        pytest.importorskip("cyclonedds")
+        pytest.importorskip("rclpy")  # not entered: no participant starts
         return open_sensor("ros2:///ft/wrench")
     if kind == "replay":
         return open_sensor(_replay_file(tmp_path / "log.csv"))
