@@ -19,13 +19,15 @@ Every orientation conversion goes through :class:`scipy.spatial.transform.Rotati
 from __future__ import annotations
 
 import math
-from typing import Final, Literal
+from typing import TYPE_CHECKING, Final, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
 from ftcomp.errors import OrientationError, ParameterError
+
+if TYPE_CHECKING:
+    from scipy.spatial.transform import Rotation
 
 __all__ = [
     "ENCODING_COLUMNS",
@@ -56,6 +58,15 @@ ENCODING_COLUMNS: Final[dict[OrientationEncoding, tuple[str, ...]]] = {
 _PAPER_EULER_SEQ: Final = "ZYX"
 #: scipy's sequence for the base tilt, intrinsic: Rx(U) @ Ry(V).
 _TILT_SEQ: Final = "XY"
+
+
+def _rotation() -> type[Rotation]:
+    """scipy's :class:`~scipy.spatial.transform.Rotation`, imported on first use: importing
+    scipy.spatial takes most of a second, which every command's ``--help`` paid through this
+    module."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation
 
 
 def rotation_from_encoding(encoding: OrientationEncoding, values: ArrayLike) -> Rotation:
@@ -89,10 +100,10 @@ def rotation_from_encoding(encoding: OrientationEncoding, values: ArrayLike) -> 
         norms = np.linalg.norm(np.atleast_2d(arr), axis=1)
         if np.any(norms < 1e-12):
             raise OrientationError("zero-norm quaternion (qx, qy, qz, qw) has no orientation")
-        return Rotation.from_quat(arr)
+        return _rotation().from_quat(arr)
     if encoding == "rotvec":
-        return Rotation.from_rotvec(arr)
-    return Rotation.from_euler(_PAPER_EULER_SEQ, arr, degrees=True)
+        return _rotation().from_rotvec(arr)
+    return _rotation().from_euler(_PAPER_EULER_SEQ, arr, degrees=True)
 
 
 def R_base_sensor_from(encoding: OrientationEncoding, values: ArrayLike) -> NDArray[np.float64]:
@@ -134,7 +145,7 @@ def encode_orientation(rotation: Rotation, encoding: OrientationEncoding) -> NDA
 
 def R_world_base_from_tilt(U_rad: float, V_rad: float) -> NDArray[np.float64]:
     """The base's mounting tilt ``R_world_base = Rx(U) @ Ry(V)`` (paper Eq. 1), shape (3, 3)."""
-    return np.asarray(Rotation.from_euler(_TILT_SEQ, [U_rad, V_rad]).as_matrix(), dtype=float)
+    return np.asarray(_rotation().from_euler(_TILT_SEQ, [U_rad, V_rad]).as_matrix(), dtype=float)
 
 
 def gravity_in_base(weight_N: float, U_rad: float, V_rad: float) -> NDArray[np.float64]:

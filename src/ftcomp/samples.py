@@ -10,15 +10,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from ftcomp.arrays import freeze_field
 from ftcomp.config_fields import FieldSpec
 from ftcomp.errors import ParameterError
 from ftcomp.frames import OrientationEncoding
+
+if TYPE_CHECKING:  # scipy.spatial takes most of a second to import: a type here only
+    from scipy.spatial.transform import Rotation
 
 __all__ = ["SENSOR_RANGE", "WRENCH_COLUMNS", "PoseList", "Samples"]
 
