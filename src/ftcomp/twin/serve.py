@@ -39,6 +39,7 @@ from ftcomp.sim.arm import ArmModel
 from ftcomp.sim.cell import SimCell
 from ftcomp.sim.cell_config import CellConfig
 from ftcomp.sim.sensor import SensorSpec, SimWrenchSensor
+from ftcomp.sim.tool import LoadSpec
 from ftcomp.twin.faces import RobotFace, SensorFace
 from ftcomp.twin.netft import RT_PRIORITY
 
@@ -205,6 +206,9 @@ class TwinResult:
         realtime: whether the loop got real-time priority (SCHED_FIFO).
         timing: the loop's timing (:class:`~ftcomp.hardware.pacing.TimingSummary`, as every
             live loop of ftcomp reports it).
+        contact: with a load and a surface, what the surface carried (the truth a client's
+            placement is judged by: ``the surface carries 4.901 N of the load's 4.903 N at
+            the end, at most 4.950 N``); empty otherwise.
     """
 
     cycles: int
@@ -214,6 +218,7 @@ class TwinResult:
     reason: str
     realtime: bool
     timing: TimingSummary
+    contact: str = ""
 
     def line(self) -> str:
         """The twin's last line: what it served and its compute time."""
@@ -227,6 +232,7 @@ class TwinResult:
             f"twin served {self.cycles} periods ({self.late_cycles} late), {self.robot_served}, "
             f"{self.sensor_served}; {step}"
             f"{'' if self.realtime else ' (no real-time priority)'}; ended by {self.reason}"
+            + (f"\n{self.contact}" if self.contact else "")
         )
 
 
@@ -263,6 +269,9 @@ class _Twin:
         self.faults = pair_faults(config.robot, config.sensor)
         self.started_at: float | None = None
         self.fault_fired = False
+        # The surface's push on the load (its true contact force, >= 0) [N]: largest, last.
+        self.contact_peak_N = 0.0
+        self.contact_last_N = 0.0
 
     def _fire_fault(self, now: float) -> None:
         """The fault on its face(s) once ``fault_at_s`` passed since a client first streamed."""
@@ -308,6 +317,24 @@ class _Twin:
             reason=reason,
             realtime=clock.realtime,
             timing=summary,
+            contact=self._contact_line(),
+        )
+
+    def _carries_a_load(self) -> bool:
+        cell_config = self.config.cell
+        return cell_config.load_kg is not None and cell_config.surface != "none"
+
+    def _contact_line(self) -> str:
+        """What the surface carried: the truth of a placement (``sim place``'s verdict is
+        judged on it; here the client's outcome is not known, so the numbers alone)."""
+        if not self._carries_a_load():
+            return ""
+        assert self.config.cell.load_kg is not None
+        weight = LoadSpec(self.config.cell.load_kg).weight_N
+        return (
+            f"contact (truth): the surface carries {self.contact_last_N:.3f} N of the load's "
+            f"{weight:.3f} N at the end, at most {self.contact_peak_N:.3f} N (pressed "
+            f"{max(0.0, self.contact_peak_N - weight):.3f} N beyond its weight)"
         )
 
     def _cycles(self, seconds: float, stop: threading.Event, log: Any, clock: LoopClock) -> str:
@@ -329,6 +356,7 @@ class _Twin:
             )
         )
         last_wrench = cell.sensor.read().wrench_sensor
+        track_contact = self._carries_a_load()
         while True:
             now = time.monotonic()
             if stop.is_set():
@@ -344,6 +372,9 @@ class _Twin:
                 cell.wait_cycle()
                 # Read after each physics step: the ticks since the last one see its state.
                 samples += wrist.read_new()
+            if track_contact:
+                self.contact_last_N = cell.true_contact_force_N()
+                self.contact_peak_N = max(self.contact_peak_N, self.contact_last_N)
             if samples:
                 last_wrench = samples[-1].wrench_sensor
             sensor.push(samples)
