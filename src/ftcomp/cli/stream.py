@@ -162,7 +162,11 @@ def run(args: argparse.Namespace) -> int:
         f"{result.readings} readings in {result.elapsed_s:.2f} s ({result.rate_hz:.0f} Hz) "
         f"to {output}{_health_text(result.health)}"
     )
-    for line in live_end_lines(result):
+    lines = live_end_lines(result)
+    timing, health = result.timing, result.health
+    if timing is not None and timing.missed_periods and health and not health.lost_packets:
+        lines[0] += "; no reading lost (each cycle logs the readings buffered since the last)"
+    for line in lines:
         print(line)
     if result.online_rate_source:
         print(f"online load: rate {result.online_rate_hz:.1f} Hz ({result.online_rate_source})")

@@ -176,10 +176,13 @@ class LoopStats:
     timing: TimingSummary
 
 
-def loop_clock(robot: Robot, name: str = "control loop") -> LoopClock:
+def loop_clock(robot: Robot, name: str = "control loop", *, log_late: bool = True) -> LoopClock:
     """The clock of a loop on ``robot``: its control period, paced when the robot is on the
-    host's clock (a simulated cell's loop is only timed)."""
-    return LoopClock(robot.control_period_s, paced=on_host_clock(robot), name=name)
+    host's clock (a simulated cell's loop is only timed); ``log_late``: as
+    :class:`~ftcomp.hardware.pacing.LoopTiming`."""
+    return LoopClock(
+        robot.control_period_s, paced=on_host_clock(robot), name=name, log_late=log_late
+    )
 
 
 def run_loop(

@@ -436,6 +436,9 @@ class LoopTiming:
         period_s: the loop's period [s], > 0.
         paced: judge start lateness (a loop on wall-clock time).
         name: names the loop in the log message of a late cycle.
+        log_late: log late cycles (at most one line a second); off for a loop whose late
+            cycles lose nothing (a logger that reads every buffered reading): they are still
+            counted.
         clock_ns: the time source of lateness and compute time [ns] (for tests).
         cpu_clock_ns: the calling thread's CPU time [ns] (for tests).
     """
@@ -446,6 +449,7 @@ class LoopTiming:
         *,
         paced: bool = True,
         name: str = "control loop",
+        log_late: bool = True,
         clock_ns: Callable[[], int] = time.perf_counter_ns,
         cpu_clock_ns: Callable[[], int] = time.thread_time_ns,
     ) -> None:
@@ -456,6 +460,7 @@ class LoopTiming:
         #: Whether the loop runs with real-time scheduling (set by its runner).
         self.realtime = False
         self.name = name
+        self.log_late = log_late
         self._clock = clock_ns
         self._cpu_clock = cpu_clock_ns
         self._period_ns = round(period_s * 1e9)
@@ -514,7 +519,8 @@ class LoopTiming:
             # At most one line a second: the write is the loop's own (stderr, a pipe that may
             # be read slowly or not at all, and then blocks), and a loaded host makes hundreds
             # of late cycles a second (a twin logging each one filled its pipe and stopped).
-            if self._logged_at_ns is None or now - self._logged_at_ns >= _LOG_EVERY_NS:
+            since = None if self._logged_at_ns is None else now - self._logged_at_ns
+            if self.log_late and (since is None or since >= _LOG_EVERY_NS):
                 _log.warning(
                     "%s: cycle %d started %.1f ms late (periods missed: %d)%s",
                     self.name,
@@ -618,6 +624,7 @@ class LoopClock:
         restart_after_s: :meth:`wait` restarts its schedule from now once the loop is this far
             behind [s] (None: one period; shorter lateness is caught up). See
             :class:`RateLimiter`.
+        log_late: log late cycles (:class:`LoopTiming`).
         clock_ns: the time source [ns] (for tests).
         cpu_clock_ns: the loop thread's CPU time [ns] (for tests).
         sleep: the sleep function [s] (for tests).
@@ -636,12 +643,18 @@ class LoopClock:
         priority: int = LOOP_PRIORITY,
         realtime: bool = True,
         restart_after_s: float | None = None,
+        log_late: bool = True,
         clock_ns: Callable[[], int] = time.perf_counter_ns,
         cpu_clock_ns: Callable[[], int] = time.thread_time_ns,
         sleep: Callable[[float], None] = time.sleep,
     ) -> None:
         self.timing = LoopTiming(
-            period_s, paced=paced, name=name, clock_ns=clock_ns, cpu_clock_ns=cpu_clock_ns
+            period_s,
+            paced=paced,
+            name=name,
+            log_late=log_late,
+            clock_ns=clock_ns,
+            cpu_clock_ns=cpu_clock_ns,
         )
         self.pacer = RateLimiter(
             period_s,
