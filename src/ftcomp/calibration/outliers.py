@@ -117,8 +117,9 @@ def check_fit(theta: NDArray[np.float64], covariance: NDArray[np.float64], sourc
         raise IdentificationError(
             f"{source}: the identified tool gravity a = [{a[0]:.3g}, {a[1]:.3g}, {a[2]:.3g}] N "
             "does not point down the base's z axis (a base tilted 90 deg or more): are the "
-            "orientations R_base_sensor and the readings in the sensor frame "
-            "(docs/conventions.md)?"
+            "orientations R_base_sensor right (recorded from a robot: its TCP pose times the "
+            "sensor's mount on the flange, as given to record; a wrong mount turns gravity away) "
+            "and the readings in the sensor frame (docs/conventions.md)?"
         )
 
 

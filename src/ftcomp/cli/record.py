@@ -106,6 +106,11 @@ def register(parser: argparse.ArgumentParser) -> None:
     parser.set_defaults(handler=run)
 
 
+def _poses(n: int) -> str:
+    """``"1 pose"``, ``"9 poses"``."""
+    return f"{n} pose" if n == 1 else f"{n} poses"
+
+
 def _config(args: argparse.Namespace) -> RecordConfig:
     """The session the options ask for (checked by the library's records)."""
     from ftcomp.session.record import HandGuided, RecordConfig, RobotDriven
@@ -190,11 +195,11 @@ def run(args: argparse.Namespace) -> int:
     plan = config.plan
     if isinstance(plan, RobotDriven):
         intro = (
-            f"recording {plan.n_poses} poses of {plan.poses.source}, "
+            f"recording {_poses(plan.n_poses)} of {plan.poses.source}, "
             f"{plan.samples_per_pose} readings each"
         )
     else:
-        intro = f"hold the arm still for {plan.still.still_s:g} s at each of {plan.n_poses} poses"
+        intro = f"hold the arm still for {plan.still.still_s:g} s at each of {_poses(plan.n_poses)}"
     with (
         session_observers(args.log, args.view, overwrite=args.force) as observers,
         open_hardware(args) as (robot, sensor, mount),
@@ -222,7 +227,7 @@ def run(args: argparse.Namespace) -> int:
             )
         finally:
             progress.close()
-    summary = f"{result.output}: {result.poses_recorded} poses ({result.readings} readings)"
+    summary = f"{result.output}: {_poses(result.poses_recorded)} ({result.readings} readings)"
     if result.timing is not None:
         print(result.timing.line())
     if result.ended == "complete":
