@@ -134,7 +134,17 @@ def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``ftcomp`` console script; returns the exit code."""
-    args_list = list(sys.argv[1:] if argv is None else argv)
+    code = _main(list(sys.argv[1:] if argv is None else argv))
+    # The process's own command (not a call from Python with its arguments): a UR controller
+    # that went silent leaves ur_rtde's threads, which abort the interpreter's teardown.
+    if argv is None and "ftcomp.hardware.ur" in sys.modules:
+        from ftcomp.hardware.ur import exit_process_if_abandoned
+
+        exit_process_if_abandoned(code)
+    return code
+
+
+def _main(args_list: list[str]) -> int:
     from ftcomp.errors import FtcompError
 
     try:  # before the command's module builds its options (from configs that may need it)

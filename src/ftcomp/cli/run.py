@@ -228,10 +228,6 @@ def run(args: argparse.Namespace) -> int:
     if result.faulted:
         code = 130 if result.outcome == "interrupted" else 1
         print(f"error: {result.message}; the robot was stopped; {summary}", file=sys.stderr)
-        if args.robot.startswith("ur:"):  # a silent controller's ur_rtde aborts at exit
-            from ftcomp.hardware.ur import exit_process_if_abandoned
-
-            exit_process_if_abandoned(code)
         return code
     print(f"{result.outcome}: {summary}")
     return 0
