@@ -51,7 +51,7 @@ MAX_ROTATION_SPEED_RAD_S = 0.5
 MAX_ROTATION_ACCEL_RAD_S2 = 5.0
 
 
-class StopReason(str, enum.Enum):
+class StopReason(enum.StrEnum):
     """Why the controller stopped the motion (a protective stop)."""
 
     NON_FINITE_SAMPLE = "non_finite_sample"
