@@ -1,8 +1,8 @@
 """Stress: each robot fault of the UR twin ends ``ftcomp run`` with exit 1 and a whole log.
 
 For each fault (``rtde-stop``, ``network-loss``, ``protective-stop``, ``script-stop``), ``--tries``
-times: a fresh ``ftcomp twin --fault NAME --fault-at-s 0.5`` on its own loopback pair, ``ftcomp
-run`` with admittance on z for 3 s (as tests/devices/test_conformance.py runs it), then counts
+times: a fresh ``ftcomp twin --fault NAME --fault-at-s 1.5`` on its own loopback pair, ``ftcomp
+run`` with admittance on z for 4 s (as tests/devices/test_conformance.py runs it), then counts
 how it ended: exit 1 with the fault's message and "the robot was stopped" (the documented end),
 another exit code (-6 is ur_rtde's ``terminate called without an active exception`` in its
 teardown, the crash issue 34 saw once), a hang (killed after 30 s), and whether the log is whole
@@ -38,6 +38,12 @@ SAYS = {
     "script-stop": "the controller refused speedL",
 }
 CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"
+#: The fault this long after run's robot stream starts [s]: run's loop is going by then (0.3 s
+#: after the connection on a quiet host, more on a loaded one; a fault before it tests nothing).
+FAULT_AT_S = 1.5
+#: run's stale limit [ms], as tests/devices/test_conformance.py runs it: the twin's own stream
+#: stalls 20-57 ms on a shared host, which is no fault of the robot's.
+STALE_MS = 75
 
 
 def _calibration(truth: Path, out: Path) -> None:
@@ -74,7 +80,8 @@ def one_try(fault: str, k: int, folder: Path, args_dump: Path | None = None) -> 
         p.unlink(missing_ok=True)
     twin = subprocess.Popen(
         [sys.executable, "-m", "ftcomp", "twin", "--robot-host", robot, "--sensor-host", sensor,
-         "--seconds", "60", "--truth", str(truth), "--fault", fault, "--fault-at-s", "0.5"],
+         "--seconds", "60", "--truth", str(truth), "--fault", fault, "--fault-at-s",
+         str(FAULT_AT_S)],
         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
     )  # fmt: skip
     try:
@@ -89,8 +96,8 @@ def one_try(fault: str, k: int, folder: Path, args_dump: Path | None = None) -> 
             done = subprocess.run(
                 [sys.executable, "-X", "faulthandler", "-c", CLIENT, "run", "--robot", robot_uri,
                  "--sensor", sensor_uri, "-c", str(cal), "--control", "admittance", "--axes", "z",
-                 "--settle-band-N", "0.0001", "--seconds", "3", "--max-late-cycles", "50",
-                 "-o", str(log)],
+                 "--settle-band-N", "0.0001", "--seconds", "4", "--max-late-cycles", "50",
+                 "--stale-ms", str(STALE_MS), "-o", str(log)],
                 capture_output=True, text=True, timeout=30.0, check=False, env=dict(os.environ),
             )  # fmt: skip
         except subprocess.TimeoutExpired:
