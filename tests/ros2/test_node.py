@@ -18,6 +18,8 @@ import numpy as np
 import pytest
 
 pytest.importorskip("rclpy")
+from rclpy.qos import QoSProfile
+
 sys.path.insert(0, str(Path(__file__).parent))
 
 from rclpy_peer import (
@@ -163,9 +165,16 @@ def test_online_load_publishes_the_mass_of_a_grasped_load(
         ):
             assert node.config is not None and node.config.online_load
             qos = qos_profile("reliable", 1000)
+            # Latched like the publisher's, but every change kept: a fast node publishes
+            # `empty` and `estimating` back to back when its first readings are released.
+            states_qos = QoSProfile(
+                depth=10,
+                reliability=DESCRIPTION_QOS.reliability,
+                durability=DESCRIPTION_QOS.durability,
+            )
             subscriptions = [
                 watcher.node.create_subscription(
-                    String, "/ftcomp/load_state", on_state, DESCRIPTION_QOS
+                    String, "/ftcomp/load_state", on_state, states_qos
                 ),
                 watcher.node.create_subscription(InertiaStamped, "/ftcomp/load", on_load, qos),
                 watcher.node.create_subscription(
@@ -175,6 +184,11 @@ def test_online_load_publishes_the_mass_of_a_grasped_load(
             deadline = time.monotonic() + 120  # discovery: seconds on a loaded host
             while any(s.get_publisher_count() == 0 for s in subscriptions):
                 assert time.monotonic() < deadline, "the node's topics were never matched"
+                time.sleep(0.02)
+            # Matched is not delivered: the latched "empty" reaches this subscriber a moment
+            # later, and a state published before that replaces it (the writer keeps the last).
+            while not states:
+                assert time.monotonic() < deadline, "no load state was ever received"
                 time.sleep(0.02)
             grasp.write_text("")  # the peer grasps from its next reading
             assert done.wait(120), (states, loads)
