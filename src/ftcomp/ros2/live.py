@@ -515,6 +515,13 @@ class WrenchPublisher:
         self._publisher = None
         self._runtime.__exit__(exc_type, exc, tb)
 
+    def subscribers(self) -> int:
+        """How many subscriptions are matched now (discovery takes a moment: what is
+        published before a subscriber matches never reaches it)."""
+        if self._publisher is None:
+            raise HardwareError(f"ros2://{self.topic}: publisher not started (use a with block)")
+        return int(self._publisher.get_subscription_count())
+
     def publish(self, t_ns: int, wrench: NDArray[np.float64]) -> None:
         """Publish one wrench [N, N*m] stamped ``t_ns`` (ROS time [ns])."""
         if self._publisher is None:
