@@ -24,6 +24,12 @@ Services (``std_srvs/Trigger``): ``~/rebias`` re-estimates the bias from ``rebia
 with the arm still and nothing touching the tool (:func:`~ftcomp.calibration.rebias.rebias`);
 ``~/reload_calibration`` reads ``calibration_file`` again. Both answer ``success`` and a line.
 
+Every callback runs on the runtime's one executor thread, one at a time (a multi-threaded
+executor costs too much per message for a 1 kHz stream: docs/ros2.md, "Benchmark"). A rebias
+therefore does not block while it reads: its service callback is a coroutine that opens a
+collection, which the readings' callback fills and closes when ``rebias_s`` has passed (or the
+status timer, a second later, if the readings stopped), and then answers.
+
 A reading that cannot be compensated honestly publishes nothing and says why on
 ``/diagnostics`` (``diagnostic_msgs/DiagnosticArray``, status ``ftcomp: compensation``, at once
 on a change and every second): non-finite values, a ``frame_id`` other than ``sensor_frame``,
@@ -39,7 +45,7 @@ import math
 import threading
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -60,6 +66,7 @@ from ftcomp.ros2.rclpy_runtime import (
     STREAM_QOS,
     DiagnosticArray,
     DiagnosticStatus,
+    Future,
     InertiaStamped,
     JointState,
     KeyValue,
@@ -102,6 +109,23 @@ class _Status:
     load: tuple[float, ...] = ()
 
 
+@dataclass
+class _Collection:
+    """The readings a ``~/rebias`` collects until ``until_ns`` [ns, system clock], and the
+    future that says they are all in."""
+
+    until_ns: int
+    done: Future = field(default_factory=Future)
+    readings: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]] = field(
+        default_factory=list
+    )
+
+    def close_if_due(self, now_ns: int) -> None:
+        """Complete :attr:`done` once ``now_ns`` [ns, system clock] reached :attr:`until_ns`."""
+        if now_ns >= self.until_ns and not self.done.done():
+            self.done.set_result(None)
+
+
 class CompensationNode:
     """The compensation node, inside a :class:`~ftcomp.ros2.rclpy_runtime.Ros2Runtime`.
 
@@ -130,9 +154,8 @@ class CompensationNode:
         unknown = sorted(set(self._given) - {f.name for f in fields(NodeConfig)})
         if unknown:
             raise ParameterError(f"unknown node settings: {', '.join(unknown)}", field=unknown[0])
-        self.runtime = Ros2Runtime(node_name, domain_id=domain_id, arguments=arguments, threads=2)
+        self.runtime = Ros2Runtime(node_name, domain_id=domain_id, arguments=arguments)
         self.config: NodeConfig | None = None
-        self._lock = threading.Lock()
         self._compensator: GravityCompensator | None = None
         self._pipeline: WrenchPipeline | None = None  # with online_load
         self._load_state, self._load_sent_ns = -1, 0
@@ -140,10 +163,7 @@ class CompensationNode:
         self._R_rec_sensor_T: NDArray[np.float64] | None = None
         self._pose: JointStatePose | None = None
         self._status = _Status(DiagnosticStatus.OK, "starting")
-        self._collect: list[tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]]
-        self._collect = []
-        self._collecting = False
-        self._collect_until: tuple[int, threading.Event] | None = None
+        self._rebias: _Collection | None = None  # a ~/rebias reading
         self._pub_sensor: Any = None
         self._pub_base: Any = None
         self._pub_diag: Any = None
@@ -237,7 +257,9 @@ class CompensationNode:
             self._out_load.header.frame_id = config.sensor_frame
             self._pub_load = node.create_publisher(InertiaStamped, "~/load", DEFAULT_QOS)
             self._pub_load_state = node.create_publisher(String, "~/load_state", DESCRIPTION_QOS)
-        services = ReentrantCallbackGroup()  # a rebias reads for seconds, beside the readings
+        # Not in the readings' (default, mutually exclusive) callback group, which a rebias
+        # awaiting its readings would otherwise hold.
+        services = ReentrantCallbackGroup()
         node.create_service(Trigger, "~/rebias", self._on_rebias, callback_group=services)
         node.create_service(
             Trigger, "~/reload_calibration", self._on_reload, callback_group=services
@@ -266,10 +288,9 @@ class CompensationNode:
             known = self._pipeline.rate_Hz if self._pipeline is not None else math.nan
             pipeline = WrenchPipeline.weighing(calibration, known if known > 0.0 else None)
         mount = calibration.mount
-        with self._lock:
-            self._calibration, self._compensator = calibration, compensator
-            self._pipeline = pipeline
-            self._R_rec_sensor_T = None if mount is None else mount.R_rec_sensor.T.copy()
+        self._calibration, self._compensator = calibration, compensator
+        self._pipeline = pipeline
+        self._R_rec_sensor_T = None if mount is None else mount.R_rec_sensor.T.copy()
 
     # ----------------------------------------------------------------- the readings
     def _on_wrench(self, msg: WrenchStamped, info: Mapping[str, Any]) -> None:
@@ -295,19 +316,16 @@ class CompensationNode:
                 f"than the reading (stale after {config.stale_s:g} s)"
             )
             return
-        with self._lock:
-            compensator, pipeline = self._compensator, self._pipeline
-            R_T = self._R_rec_sensor_T
-            if self._collecting:
-                self._collect.append((wrench, R, p))
-        self._end_collection(received)
+        collection = self._rebias
+        if collection is not None:
+            collection.readings.append((wrench, R, p))
+            collection.close_if_due(received)
+        compensator, pipeline, R_T = self._compensator, self._pipeline, self._R_rec_sensor_T
         assert compensator is not None
         R_feed = R if R_T is None else R @ R_T  # a mount-identified calibration's frame
-        # Two messages made once and refilled (one reading at a time: the readings' callback
-        # group is mutually exclusive; publish serialises at once): building a WrenchStamped
-        # costs about 80 us, most of a reading's budget at 1 kHz (measured).
-        out = self._out_sensor
-        out.header.frame_id = msg.header.frame_id
+        # Two messages made once and refilled (one callback at a time; publish serialises at
+        # once): building a WrenchStamped costs about 80 us (measured).
+        self._out_sensor.header.frame_id = msg.header.frame_id
         if pipeline is None:
             self._publish(stamp_ns(msg.header.stamp), compensator.compensate(wrench, R_feed), R)
         else:  # each reading once, in order; the first held back while the rate is measured
@@ -317,9 +335,7 @@ class CompensationNode:
                 self._publish(c.t_ns, c.wrench_contact_sensor, R_c)
                 self._publish_load(c.t_ns, c.load)
             pipeline.ready.clear()
-        with self._lock:
-            back = self._status.level != DiagnosticStatus.OK
-        if back:
+        if self._status.level != DiagnosticStatus.OK:
             self._say(DiagnosticStatus.OK, "compensating")
 
     def _publish(self, t_ns: int, contact: NDArray[np.float64], R: NDArray[np.float64]) -> None:
@@ -331,8 +347,7 @@ class CompensationNode:
         self._pub_sensor.publish(out)
         _fill(base, (R @ contact.reshape(2, 3).T).T.ravel())
         self._pub_base.publish(base)
-        with self._lock:
-            self._status.published += 1
+        self._status.published += 1
 
     def _publish_load(self, t_ns: int, load: tuple[float, ...]) -> None:
         """The online estimate after a reading stamped ``t_ns`` [ns] (``load``: the
@@ -351,77 +366,67 @@ class CompensationNode:
         self._pub_load.publish(msg)
         if changed:
             self._pub_load_state.publish(String(data=_STATE_WORDS[state]))
-        with self._lock:
-            self._status.load = (state, mass_kg, mass_std_kg)
-
-    def _end_collection(self, now_ns: int, grace_ns: int = 0) -> None:
-        """End a rebias's collection whose time is up (``grace_ns`` later)."""
-        with self._lock:
-            until = self._collect_until
-            if until is None or now_ns < until[0] + grace_ns:
-                return
-            self._collect_until = None
-        until[1].set()
+        self._status.load = (state, mass_kg, mass_std_kg)
 
     def _drop(self, why: str) -> None:
         message = why + ": nothing published"
-        with self._lock:
-            self._status.dropped += 1
-            changed = self._status.message != message
-        if changed:
+        self._status.dropped += 1
+        if self._status.message != message:
             self._say(DiagnosticStatus.ERROR, message)
 
     # ----------------------------------------------------------------- diagnostics
     def _say(self, level: bytes, message: str) -> None:
-        with self._lock:
-            self._status.level, self._status.message = level, message
+        self._status.level, self._status.message = level, message
         if level != DiagnosticStatus.OK:
             self.runtime.node.get_logger().warning(message)
         self._publish_status()
 
     def _publish_status(self) -> None:
-        self._end_collection(time.time_ns(), grace_ns=1_000_000_000)  # readings stopped
+        if self._rebias is not None:  # the readings stopped: a rebias ends a second late
+            self._rebias.close_if_due(time.time_ns() - 1_000_000_000)
         if self._pub_diag is None:
             return
-        with self._lock:
-            s = self._status
-            status = DiagnosticStatus(
-                level=s.level,
-                name="ftcomp: compensation",
-                hardware_id=self.config.sensor_frame if self.config else "",
-                message=s.message,
-                values=[
-                    KeyValue(key="published", value=str(s.published)),
-                    KeyValue(key="dropped", value=str(s.dropped)),
-                ],
-            )
-            if s.load:
-                state, mass_kg, mass_std_kg = s.load
-                status.values += [
-                    KeyValue(key="load_state", value=_STATE_WORDS[int(state)]),
-                    KeyValue(key="load_kg", value=f"{mass_kg:.4f}"),
-                    KeyValue(key="load_kg_std", value=f"{mass_std_kg:.4f}"),
-                ]
+        s = self._status
+        status = DiagnosticStatus(
+            level=s.level,
+            name="ftcomp: compensation",
+            hardware_id=self.config.sensor_frame if self.config else "",
+            message=s.message,
+            values=[
+                KeyValue(key="published", value=str(s.published)),
+                KeyValue(key="dropped", value=str(s.dropped)),
+            ],
+        )
+        if s.load:
+            state, mass_kg, mass_std_kg = s.load
+            status.values += [
+                KeyValue(key="load_state", value=_STATE_WORDS[int(state)]),
+                KeyValue(key="load_kg", value=f"{mass_kg:.4f}"),
+                KeyValue(key="load_kg_std", value=f"{mass_std_kg:.4f}"),
+            ]
         array = DiagnosticArray(status=[status])
         array.header.stamp = self.runtime.node.get_clock().now().to_msg()
         self._pub_diag.publish(array)
 
     # ----------------------------------------------------------------- services
-    def _on_rebias(self, _request: Any, response: Any) -> Any:
-        """Collect ``rebias_s`` of readings, then re-estimate the bias (in a callback group of
-        its own: the executor's other thread goes on compensating meanwhile)."""
+    async def _on_rebias(self, _request: Any, response: Any) -> Any:
+        """Collect ``rebias_s`` of readings, then re-estimate the bias (a coroutine: the
+        executor goes on compensating while it awaits the readings)."""
         config = self.config
         assert config is not None
-        done = threading.Event()
-        with self._lock:
-            self._collect, self._collecting = [], True
-            self._collect_until = (time.time_ns() + round(config.rebias_s * 1e9), done)
-        done.wait(config.rebias_s + 5.0)
-        with self._lock:
-            got, self._collecting = self._collect, False
-            calibration, R_T = self._calibration, self._R_rec_sensor_T
-        assert calibration is not None
         response.success, response.message = False, ""
+        if self._rebias is not None:
+            response.message = "a rebias is already reading: bias kept"
+            return response
+        collection = _Collection(time.time_ns() + round(config.rebias_s * 1e9))
+        self._rebias = collection
+        try:
+            await collection.done
+        finally:
+            self._rebias = None
+        got = collection.readings
+        calibration, R_T = self._calibration, self._R_rec_sensor_T
+        assert calibration is not None
         if len(got) < 2:
             response.message = (
                 f"{len(got)} readings in {config.rebias_s:g} s: nothing to rebias from"
@@ -473,8 +478,7 @@ class CompensationNode:
     @property
     def calibration(self) -> Calibration | None:
         """The calibration in use (after a rebias, the re-biased one)."""
-        with self._lock:
-            return self._calibration
+        return self._calibration
 
 
 def _fill(msg: WrenchStamped, wrench: NDArray[np.float64]) -> None:
