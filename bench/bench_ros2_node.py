@@ -14,15 +14,17 @@ the run's own:
   ``reliable``) publishing ``/ftcomp/wrench_compensated``;
 - ``relay``: an rclpy node that subscribes to ``/ft_raw`` and republishes each message as it
   came on ``/relay/wrench`` (no work: the baseline);
-- ``meter``: one rclpy node subscribed to both outputs (reliable, keep last 10000): for each
-  message the latency ``receive wall clock - header.stamp`` (raw stamp to compensated message
-  received; the meter's own delay is in both, alike), and the stamps seen;
+- ``meter``: one rclpy node subscribed to both outputs (reliable, keep last 10000), its executor
+  spun on a thread: for each message the latency ``receive wall clock - header.stamp`` (raw
+  stamp to compensated message received; the meter's own delay is in both, alike), the stamps
+  seen, and the node's ``/diagnostics`` (published, dropped, why);
 - this process, which starts them, waits and reports.
 
 Reported: messages sent, lost on each path (sent stamps never received), latency p50/p99/max
-of each path and the node's p99 over the relay's (the target: at most 1.5), CPU of the node
-and the relay processes (user + system time over the run, from ``/proc/PID/stat``). The
-non-loopback interfaces' packet counters are checked unchanged.
+of each path and the node's p99 over the relay's (the target: at most 1.5), CPU of the node,
+the relay, the meter and the sensor (user + system time over the run, from
+``/proc/PID/stat``), the load average at the end, and what the node said on ``/diagnostics``.
+The non-loopback interfaces' packet counters are checked unchanged.
 """
 
 from __future__ import annotations
@@ -143,8 +145,12 @@ def compensation_node(urdf: str, cal: str) -> None:
 
 
 def meter(out: str, ready: str, stop: str) -> None:
+    import threading
+
     import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import WrenchStamped
+    from rclpy.executors import SingleThreadedExecutor
     from rclpy.node import Node
     from rclpy.qos import QoSProfile, ReliabilityPolicy
 
@@ -162,15 +168,30 @@ def meter(out: str, ready: str, stop: str) -> None:
 
     node.create_subscription(WrenchStamped, "/ftcomp/wrench_compensated", on("node"), qos)
     node.create_subscription(WrenchStamped, "/relay/wrench", on("relay"), qos)
+    said: dict[str, object] = {"errors": []}  # the node's /diagnostics: why it dropped any
+
+    def on_diagnostics(msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            said.update({kv.key: kv.value for kv in status.values})
+            if status.level != b"\x00" and status.message not in said["errors"]:
+                said["errors"].append(status.message)  # type: ignore[attr-defined]
+
+    node.create_subscription(DiagnosticArray, "/diagnostics", on_diagnostics, qos)
+    # Spun on a thread of its own: a spin_once(timeout) loop costs a timer and a wait set per
+    # message, which at 2 kHz in starves the meter and delays both paths it measures alike.
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    threading.Thread(target=executor.spin, daemon=True).start()
     while node.count_publishers("/ftcomp/wrench_compensated") < 1 or (
         node.count_publishers("/relay/wrench") < 1
     ):
-        rclpy.spin_once(node, timeout_sec=0.05)
+        time.sleep(0.05)
     time.sleep(0.5)  # the publishers' side of the match, too
     Path(ready).write_text("ready")
     while not Path(stop).exists():
-        rclpy.spin_once(node, timeout_sec=0.01)
-    Path(out).write_text(json.dumps(got))
+        time.sleep(0.1)
+    executor.shutdown()
+    Path(out).write_text(json.dumps({**got, "diagnostics": said}))
 
 
 def main() -> int:
@@ -223,12 +244,22 @@ def main() -> int:
     sensor_proc = spawn("sensor", tmp / "sensor.json", ready)
     while not ready.exists():
         time.sleep(0.1)
-    # CPU from the moment the sensor starts sending to its end, of the two processes.
-    cpu0 = {"node": _cpu_s(node_proc.pid), "relay": _cpu_s(relay_proc.pid)}
+    # CPU from the moment the sensor starts sending to its end, of each process (the sensor's
+    # as last sampled, at most 0.2 s before it ended).
+    procs = {"node": node_proc, "relay": relay_proc, "meter": meter_proc, "sensor": sensor_proc}
+    cpu0 = {k: _cpu_s(p.pid) for k, p in procs.items()}
     t0 = time.monotonic()
-    sensor_proc.wait()
+    sensor_cpu = cpu0["sensor"]
+    while sensor_proc.poll() is None:
+        try:
+            sensor_cpu = _cpu_s(sensor_proc.pid)
+        except FileNotFoundError:
+            break
+        time.sleep(0.2)
     wall = time.monotonic() - t0
-    cpu = {k: _cpu_s(p.pid) - cpu0[k] for k, p in (("node", node_proc), ("relay", relay_proc))}
+    cpu = {k: _cpu_s(p.pid) - cpu0[k] for k, p in procs.items() if k != "sensor"}
+    cpu["sensor"] = sensor_cpu - cpu0["sensor"]
+    loadavg = Path("/proc/loadavg").read_text().split()[:3]
     time.sleep(2.0)  # the last messages arrive
     (tmp / "stop").write_text("stop")
     meter_proc.wait(timeout=120)
@@ -267,8 +298,19 @@ def main() -> int:
         f"node p99 / relay p99 = {ratio:.2f} (target <= 1.5); lost by the node: "
         f"{rows['node']['lost']} (target 0)"
     )
+    others = {k: round(100.0 * cpu[k] / wall, 1) for k in ("meter", "sensor")}
+    print(
+        f"CPU % of one core: meter {others['meter']}, sensor {others['sensor']}; load average "
+        f"at the end {' '.join(loadavg)}"
+    )
+    said = got["diagnostics"]
+    print(
+        f"the node's /diagnostics: published {said.get('published')}, dropped "
+        f"{said.get('dropped')}{''.join(chr(10) + '  ' + e for e in said['errors'])}"
+    )
     print(f"non-loopback packets sent during the run: {moved or 'none'}")
-    print(json.dumps({"sent": len(sent), **rows, "p99_ratio": ratio, "non_loopback": moved}))
+    summary = {"sent": len(sent), **rows, "p99_ratio": ratio, "cpu_percent": others}
+    print(json.dumps({**summary, "loadavg": loadavg, "non_loopback": moved}))
     return 0 if rows["node"]["lost"] == 0 and ratio <= 1.5 and not moved else 1
 
 
