@@ -52,16 +52,6 @@ def _cpu_s(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def _tx_packets() -> dict[str, int]:
-    out = {}
-    with open("/proc/net/dev", encoding="ascii") as handle:
-        for line in handle.read().splitlines()[2:]:
-            name, counters = line.split(":", 1)
-            if name.strip() != "lo":
-                out[name.strip()] = int(counters.split()[9])
-    return out
-
-
 def sensor(seconds: float, rate_hz: float, out: str, go: str) -> None:
     import rclpy
     from geometry_msgs.msg import WrenchStamped
@@ -217,7 +207,7 @@ def main() -> int:
     from rclpy_peer import MODEL, URDF
 
     from ftcomp.io.calibration_json import FORMAT, model_to_dict
-    from ftcomp.ros2.rclpy_runtime import loopback_environment
+    from ftcomp.ros2.rclpy_runtime import loopback_environment, transmitted_packets
 
     tmp = Path(tempfile.mkdtemp(prefix="bench_ros2_"))
     env = {
@@ -236,7 +226,7 @@ def main() -> int:
         cmd += ["--rate-hz", str(args.rate_hz), *map(str, extra)]
         return subprocess.Popen(cmd, env=env)
 
-    before = _tx_packets()
+    before = transmitted_packets()
     ready = tmp / "meter.ready"
     meter_proc = spawn("meter", tmp / "meter.json", ready, tmp / "stop")
     node_proc = spawn("node", tmp / "robot.urdf", tmp / "cal.json")
@@ -266,7 +256,7 @@ def main() -> int:
     for proc in (node_proc, relay_proc):
         proc.kill()
         proc.wait(timeout=30)
-    after = _tx_packets()
+    after = transmitted_packets()
     sent = json.loads((tmp / "sensor.json").read_text())["stamps"]
     got = json.loads((tmp / "meter.json").read_text())
     sent_set = set(sent)

@@ -26,24 +26,13 @@ HERE = Path(__file__).parent
 _tests = itertools.count()
 
 
-def transmitted_packets() -> dict[str, int]:
-    """Packets each non-loopback interface has sent (``/proc/net/dev``)."""
-    out = {}
-    with open("/proc/net/dev", encoding="ascii") as handle:
-        for line in handle.read().splitlines()[2:]:
-            name, counters = line.split(":", 1)
-            if name.strip() != "lo":
-                out[name.strip()] = int(counters.split()[9])
-    return out
-
-
 @pytest.fixture(name="ros2_graph")
 def ros2_graph_fixture(
     monkeypatch: pytest.MonkeyPatch, tmp_path_factory: pytest.TempPathFactory
 ) -> Iterator[int]:
     """The test's ROS_DOMAIN_ID, loopback pinned, nothing sent elsewhere (see the module)."""
     pytest.importorskip("rclpy")
-    from ftcomp.ros2.rclpy_runtime import loopback_environment
+    from ftcomp.ros2.rclpy_runtime import loopback_environment, transmitted_packets
 
     for key, value in loopback_environment(tmp_path_factory.mktemp("dds")).items():
         monkeypatch.setenv(key, value)

@@ -93,6 +93,7 @@ __all__ = [
     "received_ns",
     "stamp_msg",
     "stamp_ns",
+    "transmitted_packets",
     "twist_stamped",
     "wrench_of",
     "wrench_stamped",
@@ -152,6 +153,19 @@ def loopback_environment(directory: str | os.PathLike[str]) -> dict[str, str]:
         "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
         "FASTDDS_DEFAULT_PROFILES_FILE": str(path),
     }
+
+
+def transmitted_packets() -> dict[str, int]:
+    """Packets each non-loopback interface has sent so far (``/proc/net/dev``, Linux): read
+    before and after a run pinned by :func:`loopback_environment`, they prove it sent nothing
+    off the host."""
+    out = {}
+    with open("/proc/net/dev", encoding="ascii") as handle:
+        for line in handle.read().splitlines()[2:]:
+            name, counters = line.split(":", 1)
+            if name.strip() != "lo":
+                out[name.strip()] = int(counters.split()[9])
+    return out
 
 
 def check_domain(domain_id: int, where: str) -> int:
