@@ -227,26 +227,40 @@ CARTESIAN_URDF = """<?xml version="1.0"?>
 """
 
 
+class ServoCommands:
+    """``/servo_node/delta_twist_cmds`` (TwistStamped, base frame, MoveIt Servo's convention)
+    as a robot node takes it: the last twist, a twist older than 0.1 s counting as zero
+    (Servo's command time-out), and how many came."""
+
+    def __init__(self, node: Node, qos: QoSProfile) -> None:
+        from geometry_msgs.msg import TwistStamped
+
+        self.last = np.zeros(6)
+        self.at = 0.0
+        self.count = 0
+        node.create_subscription(TwistStamped, "/servo_node/delta_twist_cmds", self._on, qos)
+
+    def _on(self, msg: object) -> None:
+        v, w = msg.twist.linear, msg.twist.angular  # type: ignore[attr-defined]
+        self.last = np.array([v.x, v.y, v.z, w.x, w.y, w.z])
+        self.at = time.monotonic()
+        self.count += 1
+
+    def twist(self, now: float) -> np.ndarray:
+        """The twist to follow at ``now`` (monotonic [s])."""
+        return self.last if now - self.at < 0.1 else np.zeros(6)
+
+
 def robot(seconds: float, out: str) -> None:
     """Node ``servo_robot``: integrates ``/servo_node/delta_twist_cmds`` (TwistStamped, base
     frame, MoveIt Servo's convention) into the Cartesian arm's pose at 200 Hz, a twist older
     than 0.1 s counting as zero (Servo's command time-out), and publishes ``/joint_states``.
     Ends after SECONDS or when ``OUT.json.stop`` exists, writing ``{"p": [...], "R": [...],
     "last_twist": [...], "twists": N}``."""
-    from geometry_msgs.msg import TwistStamped
-
     node = Node("servo_robot")
     reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
     joints = node.create_publisher(JointState, "/joint_states", reliable)
-    latest: list[object] = [np.zeros(6), 0.0, 0]
-
-    def on_twist(msg: TwistStamped) -> None:
-        v, w = msg.twist.linear, msg.twist.angular
-        latest[0] = np.array([v.x, v.y, v.z, w.x, w.y, w.z])
-        latest[1] = time.monotonic()
-        latest[2] = int(latest[2]) + 1  # type: ignore[call-overload]
-
-    node.create_subscription(TwistStamped, "/servo_node/delta_twist_cmds", on_twist, reliable)
+    servo = ServoCommands(node, reliable)
     p = np.array([0.4, 0.0, 0.3])
     R = Rotation.from_euler("ZYX", [0.2, 0.1, np.pi - 0.05])
     end = time.monotonic() + seconds
@@ -256,7 +270,7 @@ def robot(seconds: float, out: str) -> None:
         rclpy.spin_once(node, timeout_sec=0.005)
         now = time.monotonic()
         dt, last = now - last, now
-        twist = latest[0] if now - float(latest[1]) < 0.1 else np.zeros(6)  # type: ignore[arg-type]
+        twist = servo.twist(now)
         p = p + np.asarray(twist)[:3] * dt
         R = Rotation.from_rotvec(np.asarray(twist)[3:] * dt) * R
         yaw, pitch, roll = R.as_euler("ZYX")
@@ -269,8 +283,8 @@ def robot(seconds: float, out: str) -> None:
             {
                 "p": p.tolist(),
                 "R": R.as_matrix().tolist(),
-                "last_twist": np.asarray(latest[0]).tolist(),
-                "twists": latest[2],
+                "last_twist": servo.last.tolist(),
+                "twists": servo.count,
             },
             handle,
         )
@@ -292,7 +306,6 @@ def cell(seconds: float, out: str) -> None:
     does. Ends after SECONDS, or once ``OUT.json.stop`` exists and the last twist received is
     zero (at most 10 s later), writing the sensor's start and end position in the base frame
     [m], the last twist, the count of twists and the cell's simulated and wall seconds."""
-    from geometry_msgs.msg import TwistStamped
     from simbag import urdf_of_cell
 
     import ftcomp
@@ -301,15 +314,7 @@ def cell(seconds: float, out: str) -> None:
     reliable = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
     wrenches = node.create_publisher(WrenchStamped, "/ft_sensor/wrench", reliable)
     joints = node.create_publisher(JointState, "/joint_states", reliable)
-    latest: list[object] = [np.zeros(6), 0.0, 0]
-
-    def on_twist(msg: TwistStamped) -> None:
-        v, w = msg.twist.linear, msg.twist.angular
-        latest[0] = np.array([v.x, v.y, v.z, w.x, w.y, w.z])
-        latest[1] = time.monotonic()
-        latest[2] = int(latest[2]) + 1  # type: ignore[call-overload]
-
-    node.create_subscription(TwistStamped, "/servo_node/delta_twist_cmds", on_twist, reliable)
+    servo = ServoCommands(node, reliable)
     with ftcomp.open_robot(CELL_URI) as robot, ftcomp.open_sensor("sim://", robot) as sensor:
         latched = QoSProfile(
             depth=1,
@@ -329,7 +334,7 @@ def cell(seconds: float, out: str) -> None:
             nonlocal stop_by
             if stop_by == math.inf and os.path.exists(stop):
                 stop_by = time.monotonic() + 10.0
-            return not np.any(np.asarray(latest[0])) or time.monotonic() > stop_by
+            return not np.any(servo.last) or time.monotonic() > stop_by
 
         while time.monotonic() - t0 < seconds and not (os.path.exists(stop) and stopped()):
             rclpy.spin_once(node, timeout_sec=0)
@@ -337,8 +342,7 @@ def cell(seconds: float, out: str) -> None:
             if due <= 0:
                 time.sleep(period / 2)
                 continue
-            fresh = time.monotonic() - float(latest[1]) < 0.1  # type: ignore[arg-type]
-            robot.command_twist(np.asarray(latest[0]) if fresh else np.zeros(6))
+            robot.command_twist(servo.twist(time.monotonic()))
             for _ in range(due):
                 robot.wait_cycle()
             steps += due
@@ -354,8 +358,8 @@ def cell(seconds: float, out: str) -> None:
         state = {
             "start": start,
             "end": robot.pose().p_base_tcp.tolist(),
-            "last_twist": np.asarray(latest[0]).tolist(),
-            "twists": latest[2],
+            "last_twist": servo.last.tolist(),
+            "twists": servo.count,
             "sim_s": steps * period,
             "wall_s": time.monotonic() - t0,
         }
