@@ -56,9 +56,9 @@ def _ftcomp(*args: str, timeout_s: float = 300.0) -> subprocess.CompletedProcess
     )
 
 
-#: One start in the suite (a session is 1-1.5 min of the suite's 10; issue 34 asks three:
-#: bench/bench_first_session.py runs any number).
-STARTS = [random_start(np.random.default_rng(seed)) for seed in (1,)]
+#: Three starts in the suite, as issue 34 asks (a session is 45-60 s of the suite);
+#: bench/bench_first_session.py runs any number (its 20 are in the issue's note).
+STARTS = [random_start(np.random.default_rng(seed)) for seed in (1, 2, 3)]
 
 
 @pytest.mark.parametrize(("start_q_deg", "tilt_deg"), STARTS)
