@@ -53,6 +53,7 @@ from ftcomp.ros2.rclpy_runtime import (
     qos_profile,
     received_ns,
     stamp_ns,
+    take_queued,
     twist_stamped,
     wrench_of,
     wrench_stamped,
@@ -60,10 +61,13 @@ from ftcomp.ros2.rclpy_runtime import (
 from ftcomp.ros2.tf import clean_frame
 
 if TYPE_CHECKING:
+    from rclpy.node import Node
+
     from ftcomp.control.loop import Reading
     from ftcomp.ros2.urdf import UrdfChain
 
 __all__ = [
+    "JOINT_STATES_DEPTH",
     "JointStatePose",
     "Ros2PoseSource",
     "Ros2ServoRobot",
@@ -78,6 +82,8 @@ __all__ = [
 ]
 
 _STAMPS_KEPT = 4096
+#: The joint states' subscription queue (keep last, best effort).
+JOINT_STATES_DEPTH = 10
 
 
 def _domain(options: Any, uri: Uri) -> int | None:
@@ -254,6 +260,10 @@ class JointStatePose:
     Args:
         chain: the base -> sensor chain.
         topic: the joint states' topic (for messages).
+
+    A message only updates the chain's joint positions; the forward kinematics runs when a pose
+    is asked for, once per configuration (joint states may come faster than the pose is used,
+    at 1 kHz from franka_ros2).
     """
 
     def __init__(self, chain: UrdfChain, topic: str) -> None:
@@ -266,26 +276,42 @@ class JointStatePose:
         self.t_ns: int | None = None
         self.arrived = threading.Event()
         self._latest: tuple[int, NDArray[np.float64], NDArray[np.float64]] | None = None
+        self._subscription: Any = None
+
+    def subscribe(self, node: Node) -> None:
+        """Subscribe ``node`` to :attr:`topic` (best effort, keep last
+        :data:`JOINT_STATES_DEPTH`)."""
+        qos = qos_profile("best_effort", JOINT_STATES_DEPTH)
+        self._subscription = node.create_subscription(
+            JointState, self.topic, self.on_joint_state, qos
+        )
 
     def on_joint_state(self, msg: JointState, info: Mapping[str, Any]) -> None:
-        """The subscription's callback: keep the chain's joints from ``msg``, the sensor's pose
-        they give (computed here, once per message) and when it was received (the
-        middleware's time: a backlog of callbacks does not age it)."""
+        """The subscription's callback: keep the chain's joints from ``msg``, then
+        :meth:`catch_up`."""
+        self._merge(msg, info)
+        self.catch_up()
+
+    def catch_up(self) -> None:
+        """Keep the chain's joints from the messages queued on the subscription
+        (:func:`take_queued`), and when the newest was received (the middleware's time: a
+        backlog of callbacks does not age it). A callback that handles a batch of readings
+        calls it before each, so each takes the newest joint states, as if the executor had
+        served the joint states between them."""
+        if self._subscription is not None:
+            for queued in take_queued(self._subscription, JOINT_STATES_DEPTH):
+                self._merge(*queued)
+
+    def _merge(self, msg: JointState, info: Mapping[str, Any]) -> None:
         now = received_ns(info)
         with self._lock:
             for name, position in zip(msg.name, msg.position, strict=False):
                 k = self._index.get(str(name))
                 if k is not None:
                     self._q[k] = position
-            complete = bool(np.isfinite(self._q).all())
-            q = self._q.copy()
-        if not complete:
-            return
-        T = self.chain.pose_and_jacobian(q)[0]
-        p, R = T[:3, 3].copy(), T[:3, :3].copy()
-        with self._lock:
-            self._latest = (now, p, R)
-            self.t_ns = now
+            if not np.isfinite(self._q).all():
+                return
+            self.t_ns, self._latest = now, None
         self.arrived.set()
 
     def missing(self) -> list[str]:
@@ -297,10 +323,12 @@ class JointStatePose:
         """``(reception [ns, system clock], p_base_sensor [m], R_base_sensor)`` of the latest
         joint states."""
         with self._lock:
-            latest = self._latest
-        if latest is None:
-            raise HardwareError(f"no joint states on {self.topic} yet")
-        return latest
+            if self._latest is None:
+                if self.t_ns is None:
+                    raise HardwareError(f"no joint states on {self.topic} yet")
+                T = self.chain.pose(self._q)
+                self._latest = (self.t_ns, T[:3, 3].copy(), T[:3, :3].copy())
+            return self._latest
 
 
 class Ros2PoseSource:
@@ -366,9 +394,8 @@ class Ros2PoseSource:
             text = robot_description(runtime, "/robot_description", self.timeout_s)
             chain = urdf_chain(None, text, self.base_frame, self.tcp_frame)
         self._pose = JointStatePose(chain, self.joint_states_topic)
+        self._pose.subscribe(runtime.node)
         topic = self.joint_states_topic
-        qos = qos_profile("best_effort", 10)
-        runtime.node.create_subscription(JointState, topic, self._pose.on_joint_state, qos)
         expected = "sensor_msgs/msg/JointState"
         if not wait_for(self._pose.arrived, runtime, topic, expected, self.timeout_s):
             raise HardwareError(

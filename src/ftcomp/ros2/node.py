@@ -68,7 +68,6 @@ from ftcomp.ros2.rclpy_runtime import (
     DiagnosticStatus,
     Future,
     InertiaStamped,
-    JointState,
     KeyValue,
     ReentrantCallbackGroup,
     Ros2Runtime,
@@ -79,12 +78,13 @@ from ftcomp.ros2.rclpy_runtime import (
     received_ns,
     stamp_msg,
     stamp_ns,
+    take_queued,
     wrench_of,
 )
 from ftcomp.ros2.tf import clean_frame
 from ftcomp.samples import Samples
 
-__all__ = ["LOAD_PERIOD_NS", "MOVED_M", "TURNED_RAD", "CompensationNode"]
+__all__ = ["LOAD_PERIOD_NS", "MOVED_M", "TURNED_RAD", "WRENCH_DEPTH", "CompensationNode"]
 
 #: How far the sensor may move [m] and turn [rad] while ``~/rebias`` reads: further, the arm
 #: was not still (the same bounds as ``--rebias-s``).
@@ -94,6 +94,9 @@ TURNED_RAD = 0.005
 #: this span of the readings' stamps [ns] (10 Hz: a payload does not change faster, and the
 #: wrench topics already carry the sensor's rate).
 LOAD_PERIOD_NS = 100_000_000
+#: The raw subscription's queue (keep last) and the most readings one wake-up of the executor
+#: handles (100 ms at 1 kHz; the joint states, services and status timer then get their turn).
+WRENCH_DEPTH = 100
 #: ``~/load_state``'s words for the estimate's states (the log's ``load_state`` codes).
 _STATE_WORDS = {code: state.value for state, code in LOAD_STATE_CODES.items()}
 
@@ -169,6 +172,7 @@ class CompensationNode:
         self._pub_diag: Any = None
         self._pub_load: Any = None
         self._pub_load_state: Any = None
+        self._wrenches: Any = None
 
     # ----------------------------------------------------------------- start and stop
     def __enter__(self) -> CompensationNode:
@@ -230,12 +234,7 @@ class CompensationNode:
         )
         node = runtime.node
         self._pose = JointStatePose(chain, config.joint_states)
-        node.create_subscription(
-            JointState,
-            config.joint_states,
-            self._pose.on_joint_state,
-            qos_profile("best_effort", 10),
-        )
+        self._pose.subscribe(node)  # before the readings: each wake-up serves it first
         if not wait_for(
             self._pose.arrived,
             runtime,
@@ -264,8 +263,11 @@ class CompensationNode:
         node.create_service(
             Trigger, "~/reload_calibration", self._on_reload, callback_group=services
         )
-        node.create_subscription(
-            WrenchStamped, config.wrench_topic, self._on_wrench, qos_profile(config.wrench_qos, 100)
+        self._wrenches = node.create_subscription(
+            WrenchStamped,
+            config.wrench_topic,
+            self._on_wrenches,
+            qos_profile(config.wrench_qos, WRENCH_DEPTH),
         )
         node.create_timer(1.0, self._publish_status)
         self._say(DiagnosticStatus.OK, "compensating")
@@ -293,6 +295,17 @@ class CompensationNode:
         self._R_rec_sensor_T = None if mount is None else mount.R_rec_sensor.T.copy()
 
     # ----------------------------------------------------------------- the readings
+    def _on_wrenches(self, msg: WrenchStamped, info: Mapping[str, Any]) -> None:
+        """The raw subscription's callback: this reading, then up to :data:`WRENCH_DEPTH` - 1
+        queued behind it, in order, in one of the executor's wake-ups (:func:`take_queued`),
+        each with the joint states that arrived before it was handled."""
+        pose = self._pose
+        assert pose is not None
+        self._on_wrench(msg, info)
+        for queued in take_queued(self._wrenches, WRENCH_DEPTH - 1):
+            pose.catch_up()
+            self._on_wrench(*queued)
+
     def _on_wrench(self, msg: WrenchStamped, info: Mapping[str, Any]) -> None:
         config, pose = self.config, self._pose
         assert config is not None and pose is not None

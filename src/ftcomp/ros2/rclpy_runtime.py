@@ -32,7 +32,7 @@ import contextlib
 import os
 import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from types import TracebackType
 from typing import TYPE_CHECKING, Any
@@ -58,6 +58,7 @@ try:  # the optional extra, or a sourced ROS 2
         QoSProfile,
         ReliabilityPolicy,
     )
+    from rclpy.subscription import Subscription
     from rclpy.task import Future
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
@@ -93,6 +94,7 @@ __all__ = [
     "received_ns",
     "stamp_msg",
     "stamp_ns",
+    "take_queued",
     "transmitted_packets",
     "twist_stamped",
     "wrench_of",
@@ -195,6 +197,27 @@ def received_ns(info: Mapping[str, Any]) -> int:
     two-argument subscription callback gets (now, where the middleware gives none)."""
     t = int(info.get("received_timestamp") or 0)
     return t if t > 0 else time.time_ns()
+
+
+def take_queued(subscription: Subscription[Any], most: int) -> Iterator[tuple[Any, Any]]:
+    """Up to ``most`` messages already queued on ``subscription``, each with its
+    ``MessageInfo``, oldest first; for a callback that handles the rest of its queue after the
+    message it was called with.
+
+    rclpy's executor takes one message per wake-up and builds its wait set anew, in Python, for
+    each (every subscription, service, timer and QoS event handler of the node: about as much
+    CPU as a reading's whole compensation). Taking what is already queued from the callback, with
+    the call the executor itself uses (the subscription handle's ``take_message``), shares one
+    wait set among them. ``most`` bounds how long one callback keeps the executor, so that the
+    node's other callbacks get their turn while messages keep arriving.
+    """
+    handle = subscription.handle
+    with handle:  # not destroyed while taking, as the executor guards it
+        for _ in range(most):
+            taken = handle.take_message(subscription.msg_type, subscription.raw)
+            if taken is None:
+                return
+            yield taken
 
 
 def stamp_ns(stamp: Time) -> int:

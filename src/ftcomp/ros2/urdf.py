@@ -262,6 +262,11 @@ class UrdfChain:
             x[:, k] = q[name]
         return self._kinematics(x)[0]
 
+    def pose(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``T_base_sensor`` (4, 4) at one configuration ``q`` (n,) in :attr:`joint_names`
+        order [rad or m]."""
+        return self._kinematics(np.asarray(q, dtype=float).reshape(1, -1))[0][0]
+
     def pose_and_jacobian(
         self, q: NDArray[np.float64]
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
