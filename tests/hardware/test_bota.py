@@ -17,7 +17,15 @@ import numpy as np
 import pytest
 
 from ftcomp.errors import HardwareError, ParameterError
-from ftcomp.hardware.bota import GEN0_FRAME_SIZE, Gen0Decoder, crc16_x25, gen0_frame
+from ftcomp.hardware.bota import (
+    DRIVER_CHANNELS,
+    GEN0_CHANNELS,
+    GEN0_FRAME_SIZE,
+    Gen0Decoder,
+    crc16_x25,
+    gen0_frame,
+)
+from ftcomp.hardware.protocols import ReportsExtraChannels
 from ftcomp.hardware.registry import open_sensor
 
 pytest.importorskip("serial")
@@ -136,7 +144,11 @@ def test_gen0_frames_from_the_twins_face_are_read_exactly_with_the_temperature()
         with sensor:
             readings = wait_readings(sensor, 400)
             temperature = sensor.temperature_C  # type: ignore[attr-defined]
+    assert isinstance(sensor, ReportsExtraChannels)
+    assert sensor.extra_channels == GEN0_CHANNELS == ("temperature_C",)
     assert len(readings) >= 400
+    # every reading carries its own frame's temperature (the face sends 30 degC)
+    assert {r.extras for r in readings} == {(30.0,)}
     got = np.array([r.wrench_sensor for r in readings])
     # float32 on the wire: the values as sent, rounded to float32; none lost or reordered
     # (the first reading may be any of the first frames: the port opened as they came).
@@ -182,7 +194,16 @@ def test_bota_dummy_reads_the_vendor_drivers_simulated_sensor() -> None:
         readings = wait_readings(sensor, 300)
         temperature = sensor.temperature_C  # type: ignore[attr-defined]
         acceleration = sensor.acceleration_m_s2  # type: ignore[attr-defined]
+    assert isinstance(sensor, ReportsExtraChannels)
+    assert sensor.extra_channels == DRIVER_CHANNELS
     assert len(readings) >= 300
+    # Each reading's own channels: 25 degC, gravity on the accelerometer (about 0.03 m/s^2 of
+    # noise per axis and reading, seen: one reading's norm spans 9.70-9.89, their mean's
+    # within 0.005 of 9.807).
+    extras = np.array([r.extras for r in readings])
+    assert extras.shape == (len(readings), 7) and np.all(np.isfinite(extras))
+    assert np.all(extras[:, 0] == 25.0)
+    assert np.linalg.norm(extras[:, 1:4].mean(axis=0)) == pytest.approx(9.81, abs=0.05)
     got = np.array([r.wrench_sensor for r in readings])
     # bota-driver 1.1.16's Bota_Dummy: (1, 2, 3) N and (0.1, 0.2, 0.3) N*m with noise of about
     # 0.1 N and 0.03 N*m per reading (seen), so the mean of n readings within 5 of its standard
@@ -190,6 +211,6 @@ def test_bota_dummy_reads_the_vendor_drivers_simulated_sensor() -> None:
     mean, se = got.mean(axis=0), got.std(axis=0, ddof=1) / np.sqrt(len(got))
     assert np.all(np.abs(mean - [1.0, 2.0, 3.0, 0.1, 0.2, 0.3]) <= 5 * se), (mean, se)
     assert temperature == 25.0
-    assert np.linalg.norm(acceleration) == pytest.approx(9.81, abs=0.1)
+    assert np.linalg.norm(acceleration) == pytest.approx(9.81, abs=0.2)  # the newest, one reading
     stamps = [r.t_ns for r in readings]
     assert stamps == sorted(stamps)

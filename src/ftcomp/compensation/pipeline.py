@@ -60,6 +60,8 @@ class Compensated:
         bias_updated: whether this reading moved the tracked bias (False without tracking).
         load: the online load's columns after this reading
             (:data:`~ftcomp.compensation.online.LOAD_COLUMNS`; empty without it).
+        extras: the sensor's extra channels in the reading's frame
+            (:attr:`~ftcomp.hardware.protocols.WrenchSample.extras`; empty without them).
     """
 
     t_ns: int
@@ -69,6 +71,7 @@ class Compensated:
     p_base_sensor: NDArray[np.float64]
     bias_updated: bool = False
     load: tuple[float, ...] = ()
+    extras: tuple[float, ...] = ()
 
 
 class WrenchPipeline:
@@ -103,7 +106,9 @@ class WrenchPipeline:
         #: How the online estimate's rate was found ("given", "measured from ...", "" without).
         self.rate_source = "given" if self.load is not None else ""
         self._weigh: tuple[Calibration | GravityModel, OnlineSettings, int] | None = None
-        self._held: list[tuple[int, NDArray[np.float64], NDArray[np.float64], NDArray]] = []
+        self._held: list[
+            tuple[int, NDArray[np.float64], NDArray[np.float64], NDArray, tuple[float, ...]]
+        ] = []
 
     @classmethod
     def weighing(
@@ -171,16 +176,18 @@ class WrenchPipeline:
         wrench_sensor: NDArray[np.float64],
         R_base_sensor: NDArray[np.float64],
         p_base_sensor: NDArray[np.float64],
+        extras: tuple[float, ...] = (),
     ) -> None:
         """One reading (stamp [ns], raw wrench, the sensor's orientation and origin when it was
-        read): compensated into :attr:`ready`, or held back while the rate is measured."""
+        read, its extra channels): compensated into :attr:`ready`, or held back while the rate
+        is measured."""
         if self._weigh is not None:
-            self._held.append((t_ns, wrench_sensor, R_base_sensor, p_base_sensor))
+            self._held.append((t_ns, wrench_sensor, R_base_sensor, p_base_sensor, extras))
             span_ns = t_ns - self._held[0][0]
             if span_ns >= self._weigh[2] and len(self._held) >= MIN_RATE_READINGS:
                 self._start_measured()
             return
-        self._push(t_ns, wrench_sensor, R_base_sensor, p_base_sensor)
+        self._push(t_ns, wrench_sensor, R_base_sensor, p_base_sensor, extras)
 
     def finish(self, until_ns: int | None = None) -> None:
         """At the end: the readings still held back into :attr:`ready`, the rate measured from
@@ -196,6 +203,7 @@ class WrenchPipeline:
         wrench_sensor: NDArray[np.float64],
         R_base_sensor: NDArray[np.float64],
         p_base_sensor: NDArray[np.float64],
+        extras: tuple[float, ...],
     ) -> None:
         contact = self.contact(t_ns, wrench_sensor, R_base_sensor)
         tracker, load = self.bias_tracker, self.load
@@ -208,6 +216,7 @@ class WrenchPipeline:
                 p_base_sensor,
                 tracker is not None and tracker.updated,
                 tuple(load.update(t_ns * 1e-9)) if load is not None else (),
+                extras,
             )
         )
 

@@ -64,6 +64,8 @@ class Reading:
         R_base_tcp: TCP orientation, (3, 3) (for the mount's twist conversion).
         new: every reading since the last cycle, through the pipeline, in time order (empty
             unless the cycle takes every reading).
+        extras: the sensor's extra channels in the frame of this wrench
+            (:attr:`~ftcomp.hardware.protocols.WrenchSample.extras`; empty without them).
     """
 
     t_sample_ns: int
@@ -74,6 +76,7 @@ class Reading:
     R_base_sensor: NDArray[np.float64]
     R_base_tcp: NDArray[np.float64]
     new: tuple[Compensated, ...] = ()
+    extras: tuple[float, ...] = ()
 
 
 class ControlCycle:
@@ -134,7 +137,7 @@ class ControlCycle:
         p, R = self.mount.sensor_pose(pose.p_base_tcp, pose.R_base_tcp)
         w = sample.wrench_sensor
         contact = self.pipeline.contact(sample.t_ns, w, R)
-        return Reading(sample.t_ns, pose.t_ns, w, contact, p, R, pose.R_base_tcp)
+        return Reading(sample.t_ns, pose.t_ns, w, contact, p, R, pose.R_base_tcp, (), sample.extras)
 
     def _read_every(self) -> Reading:
         sensor = self.sensor
@@ -146,7 +149,7 @@ class ControlCycle:
             self._started = True
         pipeline = self.pipeline
         for s in sensor.read_new():
-            pipeline.push(s.t_ns, s.wrench_sensor, R, p)
+            pipeline.push(s.t_ns, s.wrench_sensor, R, p, s.extras)
         new = tuple(pipeline.ready)
         pipeline.ready.clear()
         if new:
@@ -154,9 +157,11 @@ class ControlCycle:
         last = self._newest
         if last is None:
             raw, contact, t_ns = sample.wrench_sensor, np.full(6, np.nan), sample.t_ns
+            extras = sample.extras
         else:
             raw, contact, t_ns = last.wrench_raw_sensor, last.wrench_contact_sensor, last.t_ns
-        return Reading(t_ns, pose.t_ns, raw, contact, p, R, pose.R_base_tcp, new)
+            extras = last.extras
+        return Reading(t_ns, pose.t_ns, raw, contact, p, R, pose.R_base_tcp, new, extras)
 
     def command(self, twist_sensor_base: NDArray[np.float64], reading: Reading) -> None:
         """Send the sensor origin's twist (base frame) to the robot as its TCP's twist."""

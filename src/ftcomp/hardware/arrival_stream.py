@@ -86,9 +86,11 @@ class ArrivalStream:
     def _shutdown(self) -> None:
         raise NotImplementedError
 
-    def _keep(self, stamp_ns: int, wrench: np.ndarray) -> None:
-        """Keep one reading (a fresh float (6,) array, N and N*m, owned from now on)."""
-        sample = WrenchSample.owning(stamp_ns, wrench)
+    def _keep(self, stamp_ns: int, wrench: np.ndarray, extras: tuple[float, ...] = ()) -> None:
+        """Keep one reading (a fresh float (6,) array, N and N*m, owned from now on) and the
+        values of the sensor's extra channels in the same frame
+        (:class:`~ftcomp.hardware.protocols.ReportsExtraChannels`)."""
+        sample = WrenchSample.owning(stamp_ns, wrench, extras)
         with self._lock:
             self._backlog.append(sample)
             self._newest = sample

@@ -27,9 +27,12 @@ raw) is judged as above.
 
 Every reading: N and N*m in the sensor's own frame, as the sensor reports it (its sign
 convention against ftcomp's, tool on sensor, is not verified against a device), stamped on
-arrival on the host's monotonic clock; the sensor's temperature [degC] is kept with the newest
-reading (:attr:`BotaSerialSensor.temperature_C`), and bota-driver's acceleration [m/s^2] and
-angular rate [rad/s] too (:attr:`BotaDriverSensor.acceleration_m_s2`).
+arrival on the host's monotonic clock. Each reading carries the sensor's other channels of the
+same frame (:class:`~ftcomp.hardware.protocols.ReportsExtraChannels`, so the logs have them
+beside the wrench): its temperature (``temperature_C`` [degC]) and, through bota-driver, its
+IMU's acceleration (``accel_x_m_s2``.. [m/s^2]) and angular rate (``gyro_x_rad_s``.. [rad/s]),
+in the sensor's frame as it reports them; the newest are kept too
+(:attr:`BotaSerialSensor.temperature_C`, :attr:`BotaDriverSensor.acceleration_m_s2`).
 """
 
 from __future__ import annotations
@@ -49,7 +52,9 @@ from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.hardware.registry import Uri
 
 __all__ = [
+    "DRIVER_CHANNELS",
     "GEN0_BAUD_RATE",
+    "GEN0_CHANNELS",
     "GEN0_FRAME_SIZE",
     "GEN0_HEADER",
     "STATUS_BITS",
@@ -68,6 +73,18 @@ GEN0_HEADER: Final = 0xAA
 GEN0_FRAME_SIZE: Final = 1 + 2 + 24 + 4 + 4 + 2
 #: The status word's bits, by name (bit 0 first).
 STATUS_BITS: Final = ("skipped", "overrange", "invalid", "raw")
+#: The extra channels of a Gen0 serial frame (:class:`BotaSerialSensor`).
+GEN0_CHANNELS: Final = ("temperature_C",)
+#: The extra channels of a bota-driver frame (:class:`BotaDriverSensor`), sensor frame.
+DRIVER_CHANNELS: Final = (
+    "temperature_C",
+    "accel_x_m_s2",
+    "accel_y_m_s2",
+    "accel_z_m_s2",
+    "gyro_x_rad_s",
+    "gyro_y_rad_s",
+    "gyro_z_rad_s",
+)
 #: The bits that end the stream: the values are not a calibrated measurement.
 _FAULT_MASK: Final = 0b1110
 _PAYLOAD: Final = struct.Struct("<H6fIf")
@@ -128,7 +145,8 @@ class Gen0Decoder:
 
 
 class BotaSerialSensor(ArrivalStream):
-    """A Bota Gen0 sensor's serial stream (module docstring).
+    """A Bota Gen0 sensor's serial stream (module docstring); its readings carry the frame's
+    temperature (:data:`GEN0_CHANNELS`).
 
     Args:
         uri: the parsed URI (for messages).
@@ -152,6 +170,11 @@ class BotaSerialSensor(ArrivalStream):
         self.sensor_timestamp_us = 0
         #: Frames that carried the "skipped measurements" bit.
         self.skipped_flags = 0
+
+    @property
+    def extra_channels(self) -> tuple[str, ...]:
+        """:data:`GEN0_CHANNELS` (:class:`~ftcomp.hardware.protocols.ReportsExtraChannels`)."""
+        return GEN0_CHANNELS
 
     def _open(self) -> None:
         serial = self._serial
@@ -185,7 +208,7 @@ class BotaSerialSensor(ArrivalStream):
                     )
                 self.skipped_flags += status & 1
                 self.temperature_C, self.sensor_timestamp_us = temperature, stamp_us
-                self._keep(stamp, np.array(wrench, dtype=float))
+                self._keep(stamp, np.array(wrench, dtype=float), (temperature,))
 
 
 def _import_driver() -> Any:
@@ -201,7 +224,8 @@ def _import_driver() -> Any:
 
 class BotaDriverSensor(ArrivalStream):
     """A Bota sensor through Bota's ``bota-driver`` (module docstring): its simulated sensor
-    (``host="dummy"``) or a Gen A sensor over Ethernet.
+    (``host="dummy"``) or a Gen A sensor over Ethernet; its readings carry the frame's
+    temperature, acceleration and angular rate (:data:`DRIVER_CHANNELS`).
 
     Args:
         uri: the parsed URI (for messages).
@@ -245,6 +269,11 @@ class BotaDriverSensor(ArrivalStream):
         #: Frames whose status said the sensor throttled (skipped measurements).
         self.skipped_flags = 0
 
+    @property
+    def extra_channels(self) -> tuple[str, ...]:
+        """:data:`DRIVER_CHANNELS` (:class:`~ftcomp.hardware.protocols.ReportsExtraChannels`)."""
+        return DRIVER_CHANNELS
+
     def _open(self) -> None:
         try:
             driver = self._bd.BotaDriver(self._config)
@@ -275,11 +304,14 @@ class BotaDriverSensor(ArrivalStream):
                 names = [n for n in ("overrange", "invalid", "raw") if getattr(status, n)]
                 raise HardwareError(f"status {', '.join(names)}")
             self.skipped_flags += bool(status.throttled)
-            self.temperature_C = float(frame.temperature)
-            self.acceleration_m_s2 = np.array(frame.acceleration, dtype=float)
-            self.angular_rate_rad_s = np.array(frame.angular_rate, dtype=float)
+            temperature = float(frame.temperature)
+            acceleration = np.array(frame.acceleration, dtype=float)
+            angular_rate = np.array(frame.angular_rate, dtype=float)
+            self.temperature_C = temperature
+            self.acceleration_m_s2, self.angular_rate_rad_s = acceleration, angular_rate
             self.sensor_timestamp_us = int(frame.timestamp)
-            self._keep(stamp, np.array([*frame.force, *frame.torque], dtype=float))
+            extras = (temperature, *acceleration.tolist(), *angular_rate.tolist())
+            self._keep(stamp, np.array([*frame.force, *frame.torque], dtype=float), extras)
 
 
 def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:

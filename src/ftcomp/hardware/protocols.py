@@ -26,6 +26,7 @@ capability                 backends that have it
 :class:`CountsLostPackets`  ``netft://`` (RDT sequence numbers)
 :class:`ReportsStreamHealth`  ``netft://``
 :class:`TaresInHardware`   ``netft://`` (RDT's software bias, ``?bias=1``)
+:class:`ReportsExtraChannels`  ``bota://`` (temperature; through bota-driver an IMU too)
 =========================  =====================================================================
 
 Two things every robot states (members of :class:`Robot`, not capabilities): its clock
@@ -62,6 +63,7 @@ __all__ = [
     "MovesInJointSpace",
     "NothingToClose",
     "PoseSample",
+    "ReportsExtraChannels",
     "ReportsLateness",
     "ReportsStreamHealth",
     "Robot",
@@ -92,13 +94,18 @@ class WrenchSample:
         t_ns: time stamp [ns] on the session's clock (see the module docstring).
         wrench_sensor: ``[fx, fy, fz, tx, ty, tz]`` [N, N*m], sensor frame, shape (6,); may hold
             NaN when the sensor reports garbage: consumers check (see ``ftcomp.control.safety``).
+        extras: the values of the sensor's extra channels in the frame this wrench came in, in
+            the order of its :attr:`ReportsExtraChannels.extra_channels` (empty for a sensor
+            without them).
     """
 
     t_ns: int
     wrench_sensor: NDArray[np.float64] = field(repr=False)
+    extras: tuple[float, ...] = field(default=(), repr=False)
 
     def __post_init__(self) -> None:
         freeze_field(self, "wrench_sensor", (6,))
+        object.__setattr__(self, "extras", tuple(float(v) for v in self.extras))
 
     @property
     def t_s(self) -> float:
@@ -106,7 +113,9 @@ class WrenchSample:
         return self.t_ns / _NS_PER_S
 
     @classmethod
-    def owning(cls, t_ns: int, wrench_sensor: NDArray[np.float64]) -> WrenchSample:
+    def owning(
+        cls, t_ns: int, wrench_sensor: NDArray[np.float64], extras: tuple[float, ...] = ()
+    ) -> WrenchSample:
         """A sample that takes ownership of a fresh float64 (6,) array without copying it
         (for a backend's 1 kHz path; the array is made read-only, so pass one nobody else keeps).
         """
@@ -114,6 +123,7 @@ class WrenchSample:
         sample = object.__new__(cls)
         object.__setattr__(sample, "t_ns", t_ns)
         object.__setattr__(sample, "wrench_sensor", wrench_sensor)
+        object.__setattr__(sample, "extras", extras)
         return sample
 
 
@@ -496,6 +506,25 @@ class TaresInHardware(Protocol):
     @property
     def tares_in_hardware(self) -> bool:
         """Whether this sensor zeroes its readings when its stream starts."""
+        ...
+
+
+@runtime_checkable
+class ReportsExtraChannels(Protocol):
+    """A sensor that measures more than the wrench in each frame (its temperature, an IMU's
+    acceleration and angular rate): every :class:`WrenchSample` it gives carries those values
+    of the same frame in :attr:`WrenchSample.extras`, so a log row holds the values that came
+    with its wrench, not the newest.
+
+    Backends: ``bota://`` (``temperature_C``; through bota-driver also ``accel_x_m_s2``,
+    ``accel_y_m_s2``, ``accel_z_m_s2`` and ``gyro_x_rad_s``, ``gyro_y_rad_s``,
+    ``gyro_z_rad_s``, sensor frame).
+    """
+
+    @property
+    def extra_channels(self) -> tuple[str, ...]:
+        """The channels' names, each with its unit (``temperature_C``, ``accel_x_m_s2``...),
+        in the order of :attr:`WrenchSample.extras`; fixed for the sensor's life."""
         ...
 
 
