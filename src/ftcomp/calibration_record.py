@@ -27,7 +27,6 @@ from typing import ClassVar, Final, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial.transform import Rotation
 
 from ftcomp.arrays import freeze_field
 from ftcomp.errors import ParameterError
@@ -301,6 +300,8 @@ def mount_matrix(phi: NDArray[np.float64], axes: MountAxes | None) -> NDArray[np
     frame's z axis, or a rotation vector (3,) [rad]; the identity without a mount."""
     if axes is None:
         return np.eye(3)
+    from scipy.spatial.transform import Rotation  # on first use: scipy.spatial costs ~0.4 s
+
     rotvec = np.array([0.0, 0.0, phi[0]]) if axes == "yaw" else np.asarray(phi, dtype=float)
     return np.asarray(Rotation.from_rotvec(rotvec).as_matrix(), dtype=float)
 
