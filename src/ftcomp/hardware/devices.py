@@ -212,6 +212,16 @@ BUILT_IN: Final[tuple[Device, ...]] = (
     ),
     Device(
         "robot",
+        "franka",
+        "ftcomp.hardware.franka:open_robot",
+        "franka://HOST",
+        "Franka Research 3 and Panda through the FCI (franky-control)",
+        extra="franka",
+        tested="franky-sim 1.0.4's MuJoCo FR3 through franky-control 2.0.0 (protocol and "
+        "motion, not timing; no reflexes); no real arm (docs/hardware.md)",
+    ),
+    Device(
+        "robot",
         "fixed",
         "ftcomp.hardware.fixed:open_robot",
         "fixed://?rpy_deg=R,P,Y",

@@ -21,7 +21,7 @@ Capabilities beyond these protocols are protocols too, all here, checked with ``
 capability                 backends that have it
 =========================  =====================================================================
 :class:`TakesControl`      ``ur://`` (uploads its control script before the first motion)
-:class:`ReportsLateness`   ``ur://``, ``fixed://`` (robots paced on the host's clock)
+:class:`ReportsLateness`   ``ur://``, ``franka://``, ``fixed://`` (paced on the host's clock)
 :class:`ChecksReachability`  ``ur://`` (IK and safety limits), ``sim://`` (the cell's IK)
 :class:`CountsLostPackets`  ``netft://`` (RDT sequence numbers)
 :class:`ReportsStreamHealth`  ``netft://``
@@ -402,7 +402,8 @@ class ReportsLateness(Protocol):
     """A robot that waits for its control periods on the host's clock and counts the periods
     its caller missed (a loop treats ``periods_behind`` beyond a limit as a fault).
 
-    Backends: ``ur://``, ``fixed://`` (by :class:`ftcomp.hardware.pacing.RateLimiter`). Not
+    Backends: ``ur://``, ``franka://``, ``fixed://`` (by
+    :class:`ftcomp.hardware.pacing.RateLimiter`). Not
     ``sim://`` (simulated time is never late) nor ``replay://`` (a dry run).
     """
 
