@@ -37,7 +37,7 @@ from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.franka import FrankaRobot, fault_line
-from ftcomp.hardware.protocols import WrenchSample
+from ftcomp.hardware.protocols import ReportsLateness, WrenchSample
 from ftcomp.hardware.registry import open_robot
 from ftcomp.io.calibration_json import FORMAT
 from ftcomp.io.dynamic_json import FORMAT as DYNAMIC_FORMAT
@@ -124,7 +124,7 @@ def _angle_deg(R_a: np.ndarray, R_b: np.ndarray) -> float:
 
 def test_the_backend_reads_the_fr3s_pose_in_its_base_frame(sim: Sim) -> None:
     with open_robot(sim.uri()) as robot:
-        assert isinstance(robot, FrankaRobot)
+        assert isinstance(robot, FrankaRobot) and isinstance(robot, ReportsLateness)
         pose = robot.pose()
         q = robot.joint_positions_rad()
     # franky-sim starts at its home joints (0, 0, 0, -pi/2, 0, pi/2, pi/4): the hand's end

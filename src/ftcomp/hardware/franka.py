@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.errors import HardwareError, ParameterError
+from ftcomp.errors import FtcompError, HardwareError, ParameterError
 from ftcomp.extras import install_hint
 from ftcomp.hardware.pacing import LatenessOfPacer, RateLimiter
 from ftcomp.hardware.protocols import ClockName, PoseSample, Robot
@@ -223,7 +223,7 @@ class FrankaRobot(LatenessOfPacer):
         try:
             return call()
         except Exception as exc:
-            if isinstance(exc, HardwareError):
+            if isinstance(exc, FtcompError):
                 raise
             self._moving = False
             raise HardwareError(f"{self.uri.text!r}: {fault_line(exc, self._errors())}") from None
@@ -252,8 +252,10 @@ class FrankaRobot(LatenessOfPacer):
             HardwareError: naming libfranka's error.
         """
         arm = self._connected()
-        if self._moving:
-            self._call(arm.poll_motion)
+        # poll_motion raises the motion's error; it returns True once no motion runs (franky
+        # 2.0: True when idle and after a motion's end, False while one runs).
+        if self._moving and self._call(arm.poll_motion):
+            self._moving = False  # its hold ran out: the arm came to rest
 
     def pose(self) -> PoseSample:
         """The end effector's pose in the base frame (``O_T_EE``), stamped on the host's
@@ -299,13 +301,13 @@ class FrankaRobot(LatenessOfPacer):
         R = np.asarray(R_base_tcp, dtype=float)
         if p.shape != (3,) or R.shape != (3, 3) or not np.all(np.isfinite(p)):
             raise ParameterError("move_pose needs a finite position (3,) and a rotation (3, 3)")
+        self.stop()  # a velocity motion still held: one control signal type at a time
         self.check()
         T = np.eye(4)
         T[:3, :3], T[:3, 3] = R, p
         motion = franky.CartesianMotion(
             franky.Affine(T), franky.ReferenceType.Absolute, relative_dynamics_factor=self.dynamics
         )
-        self._moving = False  # a blocking move raises its own errors
         self._call(lambda: self._connected().move(motion))
         at = self.pose()
         off_m = float(np.linalg.norm(at.p_base_tcp - p))
@@ -457,7 +459,14 @@ def set_load(
                 float(mass_kg), cog_flange.tolist(), inertia_flange.flatten(order="F").tolist()
             )
         )
-        after = _load_of(robot._call(lambda: arm.state))
+        deadline = time.monotonic() + 1.0  # states already on their way carry the old load
+        while True:
+            after = _load_of(robot._call(lambda: arm.state))
+            done = abs(after.mass_kg - mass_kg) < 1e-6 and np.allclose(
+                after.cog_flange_m, cog_flange, atol=1e-6
+            )
+            if done or time.monotonic() > deadline:
+                break
     return before, after
 
 
