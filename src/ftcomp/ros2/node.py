@@ -84,7 +84,14 @@ from ftcomp.ros2.rclpy_runtime import (
 from ftcomp.ros2.tf import clean_frame
 from ftcomp.samples import Samples
 
-__all__ = ["LOAD_PERIOD_NS", "MOVED_M", "TURNED_RAD", "WRENCH_DEPTH", "CompensationNode"]
+__all__ = [
+    "LOAD_PERIOD_NS",
+    "MOVED_M",
+    "TURNED_RAD",
+    "WRENCH_BATCH",
+    "WRENCH_DEPTH",
+    "CompensationNode",
+]
 
 #: How far the sensor may move [m] and turn [rad] while ``~/rebias`` reads: further, the arm
 #: was not still (the same bounds as ``--rebias-s``).
@@ -94,9 +101,13 @@ TURNED_RAD = 0.005
 #: this span of the readings' stamps [ns] (10 Hz: a payload does not change faster, and the
 #: wrench topics already carry the sensor's rate).
 LOAD_PERIOD_NS = 100_000_000
-#: The raw subscription's queue (keep last) and the most readings one wake-up of the executor
-#: handles (100 ms at 1 kHz; the joint states, services and status timer then get their turn).
-WRENCH_DEPTH = 100
+#: The raw subscription's queue (keep last): 1 s at 1 kHz. The node handles readings faster
+#: than a sensor sends them, so the queue is empty but across a stall of the host's scheduler,
+#: whose readings it holds instead of overwriting them (docs/ros2.md, "Benchmark").
+WRENCH_DEPTH = 1000
+#: The most readings one wake-up of the executor handles (the joint states, the services and
+#: the status timer then get their turn): 100 ms at 1 kHz.
+WRENCH_BATCH = 100
 #: ``~/load_state``'s words for the estimate's states (the log's ``load_state`` codes).
 _STATE_WORDS = {code: state.value for state, code in LOAD_STATE_CODES.items()}
 
@@ -296,13 +307,13 @@ class CompensationNode:
 
     # ----------------------------------------------------------------- the readings
     def _on_wrenches(self, msg: WrenchStamped, info: Mapping[str, Any]) -> None:
-        """The raw subscription's callback: this reading, then up to :data:`WRENCH_DEPTH` - 1
+        """The raw subscription's callback: this reading, then up to :data:`WRENCH_BATCH` - 1
         queued behind it, in order, in one of the executor's wake-ups (:func:`take_queued`),
         each with the joint states that arrived before it was handled."""
         pose = self._pose
         assert pose is not None
         self._on_wrench(msg, info)
-        for queued in take_queued(self._wrenches, WRENCH_DEPTH - 1):
+        for queued in take_queued(self._wrenches, WRENCH_BATCH - 1):
             pose.catch_up()
             self._on_wrench(*queued)
 
