@@ -8,7 +8,7 @@ that moment (from a sample CSV, a recording or a bag). :class:`PoseList` holds t
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -23,7 +23,7 @@ from ftcomp.frames import OrientationEncoding
 if TYPE_CHECKING:  # scipy.spatial takes most of a second to import: a type here only
     from scipy.spatial.transform import Rotation
 
-__all__ = ["SENSOR_RANGE", "WRENCH_COLUMNS", "PoseList", "Samples"]
+__all__ = ["SENSOR_RANGE", "WRENCH_COLUMNS", "PoseList", "Samples", "frozen_channels"]
 
 #: The six wrench columns, in order: forces [N] then torques [N*m], sensor frame.
 WRENCH_COLUMNS: tuple[str, ...] = ("fx", "fy", "fz", "tx", "ty", "tz")
@@ -32,6 +32,26 @@ WRENCH_COLUMNS: tuple[str, ...] = ("fx", "fy", "fz", "tx", "ty", "tz")
 SENSOR_RANGE = FieldSpec(
     help="the sensor's measuring range per axis", unit="N, N*m", gt=0.0, length=2
 )
+
+
+def frozen_channels(
+    channels: Mapping[str, object], n: int, source: str
+) -> dict[str, NDArray[np.float64]]:
+    """A copy of extra channels (name -> values), each a read-only float array of shape (n,)
+    (:attr:`Samples.extras`); a name clashing with a wrench column or a wrong length is a
+    ParameterError naming ``source``."""
+    out: dict[str, NDArray[np.float64]] = {}
+    for name, values in channels.items():
+        if name in WRENCH_COLUMNS or not name:
+            raise ParameterError(f"{source}: an extra channel may not be called {name!r}")
+        array = np.array(values, dtype=float)
+        if array.shape != (n,):
+            raise ParameterError(
+                f"{source}: extra channel {name!r} has shape {array.shape}, expected ({n},)"
+            )
+        array.setflags(write=False)
+        out[name] = array
+    return out
 
 
 @dataclass(frozen=True)
@@ -49,6 +69,11 @@ class Samples:
             read by :func:`ftcomp.read_samples` gives a view that reads them on access).
         source: where the samples came from (a file path, "simulated cell"...), for messages.
         warnings: things that look wrong but were accepted (e.g. angles that look like radians).
+        extras: the sensor's extra channels of each reading, by name with its unit
+            (``temperature_C``, ``accel_x_m_s2``..., :class:`~ftcomp.hardware.protocols.
+            ReportsExtraChannels`), each shape (N,); filled by a recording (written as the
+            sample CSV's last columns), empty when read from a file (whose extra columns are
+            in ``header`` and ``rows``).
     """
 
     wrench_sensor: NDArray[np.float64] = field(repr=False)
@@ -60,11 +85,13 @@ class Samples:
     rows: Sequence[tuple[str, ...]] = field(default=(), repr=False)
     source: str = "<memory>"
     warnings: tuple[str, ...] = ()
+    extras: Mapping[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         n = len(self.wrench_sensor)
         freeze_field(self, "wrench_sensor", (n, 6))
         freeze_field(self, "R_base_sensor", (n, 3, 3))
+        object.__setattr__(self, "extras", frozen_channels(self.extras, n, self.source))
         if self.pose is not None:
             freeze_field(self, "pose", (n,), dtype=str)
         if self.t is not None:

@@ -12,6 +12,7 @@ import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,8 +26,13 @@ from ftcomp.hardware.bota import (
     crc16_x25,
     gen0_frame,
 )
+from ftcomp.hardware.fixed import FixedRobot
 from ftcomp.hardware.protocols import ReportsExtraChannels
 from ftcomp.hardware.registry import open_sensor
+from ftcomp.io.samples_csv import read_samples
+from ftcomp.paper import paper_poses
+from ftcomp.session.pose_record import WrenchTolerance
+from ftcomp.session.record import RecordConfig, RobotDriven, record
 
 pytest.importorskip("serial")
 
@@ -156,6 +162,35 @@ def test_gen0_frames_from_the_twins_face_are_read_exactly_with_the_temperature()
     expected = as_float32(sent(first + len(got))[first:])
     assert np.array_equal(got, expected)
     assert temperature == 30.0
+
+
+class InstantArm(FixedRobot):
+    """A robot on the host's clock (a Bota sensor's) that is at each pose as soon as asked."""
+
+    def __init__(self) -> None:
+        super().__init__(np.zeros(3), np.eye(3), 500.0, pose_known=True)
+
+    def move_pose(self, p_base_tcp: np.ndarray, R_base_tcp: np.ndarray, duration_s: float) -> None:
+        self._p, self._R = np.array(p_base_tcp), np.array(R_base_tcp)
+
+
+def test_a_recording_from_the_twins_gen0_face_has_its_temperature_column(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "s.csv"
+    # The face's readings are noise of tens of N: any drift between a window's halves is taken.
+    plan = RobotDriven(
+        paper_poses(), samples_per_pose=10, tolerance=WrenchTolerance(1e6, 1e6), max_tries=1
+    )
+    with serving() as (uri, proc):
+        sensor = open_sensor(uri)
+        say(proc, "go")
+        with sensor, InstantArm() as arm:
+            result = record(arm, sensor, RecordConfig(out, plan))
+    assert result.ended == "complete" and result.readings == 90
+    written = read_samples(out)
+    assert written.header[-1] == "temperature_C"
+    assert [row[-1] for row in written.rows] == ["30"] * 90  # the face's 30 degC, exactly
 
 
 @pytest.mark.parametrize(

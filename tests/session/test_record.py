@@ -13,15 +13,16 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from ftcomp.calibration.identify import calibrate, max_deviations_in_standard_errors
+from ftcomp.cli import main
 from ftcomp.errors import HardwareError, ParameterError, UnreachablePoseError
-from ftcomp.hardware.protocols import PoseSample, WrenchSample
+from ftcomp.hardware.protocols import PoseSample, ReportsExtraChannels, WrenchSample
 from ftcomp.io.samples_csv import read_samples
 from ftcomp.model import GravityModel
 from ftcomp.paper import paper_poses
 from ftcomp.samples import PoseList
 from ftcomp.session.hand_guided import StillCriteria
 from ftcomp.session.pose_record import PoseEvent
-from ftcomp.session.record import HandGuided, RecordConfig, RobotDriven, record
+from ftcomp.session.record import OBSERVED_COLUMNS, HandGuided, RecordConfig, RobotDriven, record
 
 from conftest import FORCE_NOISE_N, TORQUE_NOISE_NM, TRUE_MODEL
 
@@ -135,6 +136,76 @@ def test_a_robot_driven_session_writes_every_pose_and_its_file_calibrates_to_the
     deviations = max_deviations_in_standard_errors(calibrate(written), TRUE_MODEL)
     assert max(deviations.values()) < SE_BOUND, deviations
     assert cell.stops >= 1
+
+
+class WarmCell(FakeCell):
+    """A cell whose sensor also reports its temperature (a ReportsExtraChannels sensor): each
+    reading carries its own, ``30 + t`` [degC] with ``t`` its stamp [s]."""
+
+    extra_channels = ("temperature_C",)
+
+    def wait_cycle(self) -> None:
+        super().wait_cycle()
+        self.pending[-2:] = [
+            WrenchSample(s.t_ns, s.wrench_sensor, (30.0 + s.t_ns * 1e-9,))
+            for s in self.pending[-2:]
+        ]
+
+
+def test_a_recording_writes_each_readings_extra_channels_and_still_calibrates(
+    tmp_path: Path, rng: np.random.Generator
+) -> None:
+    cell = WarmCell(TRUE_MODEL, rng)
+    assert isinstance(cell, ReportsExtraChannels)
+    seen: list[tuple[str, ...]] = []
+
+    class Columns:
+        def open(self, columns: Any) -> None:
+            seen.append(tuple(columns))
+
+        def row(self, t_ns: int, row: Any) -> None:
+            assert row[-1] == 30.0 + t_ns * 1e-9
+
+        def event(self, t_ns: int, kind: str, text: str) -> None:
+            pass
+
+        def close(self) -> None:
+            pass
+
+    result = record(cell, cell, driven(tmp_path / "s.csv"), observers=[Columns()])
+    assert result.ended == "complete" and result.samples is not None
+    assert seen == [(*OBSERVED_COLUMNS, "temperature_C")]
+    written = read_samples(result.output)
+    assert written.header[-1] == "temperature_C"
+    assert written.t is not None
+    # each row the temperature of its own reading (30 + its stamp), written as every number of
+    # a sample file, to 10 significant digits
+    temperature = np.array([float(row[-1]) for row in written.rows])
+    np.testing.assert_allclose(temperature, result.samples.extras["temperature_C"], rtol=1e-9)
+    np.testing.assert_allclose(temperature, 30.0 + result.samples.t, rtol=1e-9)
+    deviations = max_deviations_in_standard_errors(calibrate(written), TRUE_MODEL)
+    assert max(deviations.values()) < SE_BOUND, deviations
+    # and ftcomp calibrate reads it as any other sample file
+    assert main(["calibrate", str(result.output), "-o", str(tmp_path / "c.json")]) == 0
+
+
+def test_a_hand_guided_recording_keeps_each_readings_extra_channels(
+    tmp_path: Path, rng: np.random.Generator
+) -> None:
+    A, B = Rotation.from_euler("x", 180, degrees=True), Rotation.from_euler("y", 90, degrees=True)
+    C, moving = (
+        Rotation.from_euler("x", 60, degrees=True),
+        Rotation.from_euler("y", 20, degrees=True),
+    )
+    timeline = [(0.5, A), (0.01, moving), (0.5, B), (0.01, moving), (0.5, C), (10.0, A)]
+    cell = WarmCell(TRUE_MODEL, rng, hold=_held(timeline))
+    plan = HandGuided(3, StillCriteria(still_s=0.2), samples_per_pose=100)
+    result = record(cell, cell, RecordConfig(tmp_path / "s.csv", plan))
+    assert result.ended == "complete" and result.poses_recorded == 3
+    for pose in result.records:
+        np.testing.assert_array_equal(pose.extras["temperature_C"], 30.0 + pose.t_ns * 1e-9)
+    written = read_samples(result.output)
+    assert written.header[-1] == "temperature_C" and len(written) == 300
 
 
 def test_a_fault_after_the_first_pose_keeps_the_poses_so_far_and_stops_the_robot(

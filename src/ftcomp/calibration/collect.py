@@ -4,7 +4,8 @@
 so the same code collects from the simulated cell (``sim://``) and from a real arm. At each pose
 of a :class:`~ftcomp.samples.PoseList` it moves the sensor there (blocking, through the mount),
 waits until the arm is at rest, and records the next ``samples_per_pose`` sensor readings with
-the sensor's measured orientation.
+the sensor's measured orientation (and a sensor's extra channels, its temperature or IMU, each
+reading's own: :class:`~ftcomp.hardware.protocols.ReportsExtraChannels`).
 """
 
 from __future__ import annotations
@@ -15,7 +16,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ftcomp.errors import FtcompError, HardwareError, ParameterError
-from ftcomp.hardware.protocols import Mount, Robot, WrenchSample, WrenchSensor
+from ftcomp.hardware.protocols import (
+    Mount,
+    ReportsExtraChannels,
+    Robot,
+    WrenchSample,
+    WrenchSensor,
+)
 from ftcomp.samples import PoseList, Samples
 
 __all__ = ["record_static"]
@@ -69,8 +76,8 @@ def record_static(
             note the simulator's truth there).
 
     Returns:
-        :class:`~ftcomp.samples.Samples` in the ``paper_euler`` encoding, with ``pose`` and
-        ``t`` (seconds on the session's clock).
+        :class:`~ftcomp.samples.Samples` in the ``paper_euler`` encoding, with ``pose``, ``t``
+        (seconds on the session's clock) and a sensor's extra channels in ``extras``.
 
     Raises:
         UnreachablePoseError: a pose cannot be reached (the error names it).
@@ -86,7 +93,8 @@ def record_static(
         p_default = np.asarray(position_base_m, dtype=float)
         if p_default.shape != (3,) or not np.isfinite(p_default).all():
             raise ParameterError(f"position_base_m must be 3 finite numbers [m], got {p_default}")
-    wrenches, rotations, pose_ids, times = [], [], [], []
+    channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
+    wrenches, rotations, pose_ids, times, extras = [], [], [], [], []
     for i, (label, rotation) in enumerate(zip(poses.ids, poses.rotations, strict=True)):
         name = f"pose {label} of {poses.source}"
         p = poses.positions_base_m[i] if poses.positions_base_m is not None else p_default
@@ -100,11 +108,14 @@ def record_static(
         R_base_sensor = mount.sensor_pose(at.p_base_tcp, at.R_base_tcp)[1]
         wrenches.append(np.array([r.wrench_sensor for r in readings]))
         times.append(np.array([r.t_ns for r in readings], dtype=np.int64))
+        if channels:
+            extras.append(np.array([r.extras for r in readings], dtype=float))
         rotations.append(np.broadcast_to(R_base_sensor, (samples_per_pose, 3, 3)))
         pose_ids.extend([label] * samples_per_pose)
         if on_pose is not None:
             on_pose(i, label)
     t_ns = np.concatenate(times)
+    extra = np.concatenate(extras).reshape(len(t_ns), len(channels)) if channels else None
     return Samples(
         wrench_sensor=np.concatenate(wrenches),
         R_base_sensor=np.concatenate(rotations),
@@ -112,4 +123,5 @@ def record_static(
         pose=np.array(pose_ids),
         t=t_ns.astype(np.float64) * 1e-9,
         source=f"recording at {len(poses)} poses of {poses.source}",
+        extras={} if extra is None else dict(zip(channels, extra.T, strict=True)),
     )

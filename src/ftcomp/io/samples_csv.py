@@ -23,7 +23,7 @@ from __future__ import annotations
 import csv
 import io
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -438,6 +438,7 @@ def write_samples(
     encoding: OrientationEncoding,
     pose: ArrayLike | None = None,
     t: ArrayLike | None = None,
+    extras: Mapping[str, ArrayLike] | None = None,
 ) -> None:
     """Write readings as a sample CSV, atomically.
 
@@ -448,6 +449,8 @@ def write_samples(
         encoding: the orientation encoding to write.
         pose: optional pose id per row, shape (N,).
         t: optional time stamp per row [s], shape (N,).
+        extras: a sensor's extra channels (name with its unit -> one value per row, (N,)), the
+            last columns, in the mapping's order (:attr:`~ftcomp.samples.Samples.extras`).
     """
     wrench = np.asarray(wrench_sensor, dtype=float).reshape(-1, 6)
     orient = encode_orientation(rotations, encoding).reshape(len(wrench), -1)
@@ -463,6 +466,13 @@ def write_samples(
     columns.extend([_fmt(v) for v in orient[:, j]] for j in range(orient.shape[1]))
     header.extend(WRENCH_COLUMNS)
     columns.extend([_fmt(v) for v in wrench[:, j]] for j in range(6))
+    for name, values in (extras or {}).items():
+        if name in header:
+            raise ParameterError(f"write_samples: extra channel {name!r} is a sample column")
+        header.append(name)
+        columns.append([_fmt(v) for v in np.asarray(values, dtype=float).ravel()])
     if any(len(col) != len(wrench) for col in columns):
-        raise ParameterError("write_samples: pose, t and rotations must have one entry per row")
+        raise ParameterError(
+            "write_samples: pose, t, rotations and extras must have one entry per row"
+        )
     write_table(path, header, list(zip(*columns, strict=True)))

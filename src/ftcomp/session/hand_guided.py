@@ -91,6 +91,9 @@ class ManualRecorder:
             happens.
         samples_per_pose: readings kept per pose (the window's last ones); None: the last
             three quarters of the window.
+        extra_channels: the names of the sensor's extra channels, whose values each reading
+            carries (:class:`~ftcomp.hardware.protocols.ReportsExtraChannels`), kept in each
+            :attr:`PoseRecord.extras <ftcomp.session.pose_record.PoseRecord.extras>`.
     """
 
     def __init__(
@@ -100,6 +103,7 @@ class ManualRecorder:
         on_event: Callable[[PoseEvent], None],
         *,
         samples_per_pose: int | None = None,
+        extra_channels: tuple[str, ...] = (),
     ) -> None:
         if not (isinstance(n_poses, int) and n_poses >= 1):
             raise ParameterError(f"the number of poses must be an integer >= 1, got {n_poses}")
@@ -109,12 +113,15 @@ class ManualRecorder:
         self.criteria = criteria
         self.on_event = on_event
         self.samples_per_pose = samples_per_pose
+        self.extra_channels = extra_channels
         self.records: list[PoseRecord] = []
         self._zero = np.zeros(6)
         self._still_ns = round(criteria.still_s * 1e9)
         self._since_ns: int | None = None
         self._ref: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
-        self._window: collections.deque[tuple[int, NDArray[np.float64]]] = collections.deque()
+        self._window: collections.deque[tuple[int, NDArray[np.float64], tuple[float, ...]]] = (
+            collections.deque()
+        )
         self._handled = False
 
     def _moved(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> bool:
@@ -136,10 +143,10 @@ class ManualRecorder:
         assert self._since_ns is not None
         for c in reading.new:
             if c.t_ns >= self._since_ns:
-                self._window.append((c.t_ns, c.wrench_raw_sensor))
+                self._window.append((c.t_ns, c.wrench_raw_sensor, c.extras))
         if self._handled or now - self._since_ns < self._still_ns or len(self._window) < 4:
             return self._zero
-        wrench = np.array([w for _, w in self._window])
+        wrench = np.array([w for _, w, _ in self._window])
         if not is_settled(wrench, self.criteria.wrench):
             # Still settling: slide the window to its second half and wait on.
             half = len(self._window) // 2
@@ -153,8 +160,12 @@ class ManualRecorder:
             self.on_event(PoseEvent("too_close", number, angle, None))
             return self._zero
         keep = self.samples_per_pose or (3 * len(self._window)) // 4
-        stamps = np.array([t for t, _ in self._window], dtype=np.int64)[-keep:]
-        record = PoseRecord(str(len(self.records) + 1), R, p, wrench[-keep:], stamps)
+        stamps = np.array([t for t, _, _ in self._window], dtype=np.int64)[-keep:]
+        names = self.extra_channels
+        values = np.array([e for _, _, e in self._window], dtype=float)
+        values = values.reshape(len(self._window), len(names))
+        extras = dict(zip(names, values[-keep:].T, strict=True))
+        record = PoseRecord(str(len(self.records) + 1), R, p, wrench[-keep:], stamps, extras)
         self.records.append(record)
         self.on_event(PoseEvent("recorded", len(self.records), angle, record))
         return None if len(self.records) >= self.n_poses else self._zero

@@ -11,7 +11,7 @@ than a :class:`WrenchTolerance`. :func:`samples_from_records` joins the records 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 from ftcomp.arrays import freeze_field
 from ftcomp.config_fields import check_fields, param
 from ftcomp.errors import ParameterError
-from ftcomp.samples import Samples
+from ftcomp.samples import Samples, frozen_channels
 
 __all__ = [
     "PoseEvent",
@@ -45,6 +45,8 @@ class PoseRecord:
         p_base_sensor: the sensor origin there [m], base frame, (3,).
         wrench_sensor: the readings [N, N*m], sensor frame, (n, 6).
         t_ns: their stamps [ns] on the session's clock, (n,).
+        extras: the sensor's extra channels of each reading, by name (``temperature_C``...),
+            (n,) each (:attr:`~ftcomp.samples.Samples.extras`; empty without them).
     """
 
     pose_id: str
@@ -52,6 +54,7 @@ class PoseRecord:
     p_base_sensor: NDArray[np.float64] = field(repr=False)
     wrench_sensor: NDArray[np.float64] = field(repr=False)
     t_ns: NDArray[np.int64] = field(repr=False)
+    extras: Mapping[str, NDArray[np.float64]] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         n = len(self.wrench_sensor)
@@ -61,6 +64,8 @@ class PoseRecord:
         freeze_field(self, "p_base_sensor", (3,))
         freeze_field(self, "wrench_sensor", (n, 6))
         freeze_field(self, "t_ns", (n,), dtype=np.int64)
+        extras = frozen_channels(self.extras, n, f"pose {self.pose_id}")
+        object.__setattr__(self, "extras", extras)
 
     @property
     def mean(self) -> NDArray[np.float64]:
@@ -148,10 +153,12 @@ def nearest_pose(records: Sequence[PoseRecord], R_base_sensor: ArrayLike) -> tup
 
 
 def samples_from_records(records: Sequence[PoseRecord], source: str) -> Samples:
-    """All records as one :class:`~ftcomp.samples.Samples` (``pose`` ids, ``t`` in seconds)."""
+    """All records as one :class:`~ftcomp.samples.Samples` (``pose`` ids, ``t`` in seconds,
+    the extra channels the records share)."""
     if not records:
         raise ParameterError(f"{source}: no poses recorded")
     n = [len(r.wrench_sensor) for r in records]
+    names = [name for name in records[0].extras if all(name in r.extras for r in records)]
     return Samples(
         wrench_sensor=np.concatenate([r.wrench_sensor for r in records]),
         R_base_sensor=np.concatenate(
@@ -161,4 +168,5 @@ def samples_from_records(records: Sequence[PoseRecord], source: str) -> Samples:
         pose=np.repeat([r.pose_id for r in records], n),
         t=np.concatenate([r.t_ns for r in records]).astype(np.float64) * 1e-9,
         source=source,
+        extras={name: np.concatenate([r.extras[name] for r in records]) for name in names},
     )

@@ -38,7 +38,7 @@ from ftcomp.control.loop import ControlCycle, loop_clock, run_loop
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import OrientationEncoding, quat_from_matrix
 from ftcomp.hardware.pacing import LoopClock, TimingSummary
-from ftcomp.hardware.protocols import Mount, Robot, WrenchSensor
+from ftcomp.hardware.protocols import Mount, ReportsExtraChannels, Robot, WrenchSensor
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.samples_csv import write_samples
 from ftcomp.samples import PoseList, Samples
@@ -254,18 +254,30 @@ class _SampleFile:
             encoding=self.encoding,
             pose=self.samples.pose,
             t=self.samples.t,
+            extras=self.samples.extras,
         )
 
 
-#: The rows an observer of a recording sees: one per reading, as a stream with a pose logs it.
+#: The rows an observer of a recording sees: one per reading, as a stream with a pose logs it
+#: (and the sensor's extra channels after them, :func:`~ftcomp.session.stream.stream_columns`).
 OBSERVED_COLUMNS = stream_columns(with_pose=True, compensated=False)
 
 
-def _observe(thread: ObserverThread, record: PoseRecord, number: int, planned: int) -> None:
+def _observe(
+    thread: ObserverThread,
+    record: PoseRecord,
+    number: int,
+    planned: int,
+    channels: tuple[str, ...],
+) -> None:
     """Hand a recorded pose's readings to the observers, then the event."""
     pose = [*quat_from_matrix(record.R_base_sensor), *record.p_base_sensor.tolist()]
-    for t_ns, w in zip(record.t_ns.tolist(), record.wrench_sensor.tolist(), strict=True):
-        thread.row(t_ns, [t_ns * 1e-9, *w, *pose])
+    extras = np.array([record.extras[name] for name in channels]).T.reshape(
+        len(record.t_ns), len(channels)
+    )
+    rows = zip(record.t_ns.tolist(), record.wrench_sensor.tolist(), extras.tolist(), strict=True)
+    for t_ns, w, e in rows:
+        thread.row(t_ns, [t_ns * 1e-9, *w, *pose, *e])
     text = f"pose {number} of {planned} recorded ({record.pose_id})"
     thread.event(int(record.t_ns[-1]), "pose", text)
 
@@ -299,8 +311,9 @@ def record(
         on_event: called with every :class:`~ftcomp.session.pose_record.PoseEvent` (a pose
             recorded, once it is in the file; a hand-guided still period ignored), e.g. to
             announce it.
-        observers: see every recorded reading as a row (:data:`OBSERVED_COLUMNS`, once its
-            pose is in the file) and the events (each pose, the end), on a worker thread.
+        observers: see every recorded reading as a row (:data:`OBSERVED_COLUMNS`, then the
+            sensor's extra channels; once its pose is in the file) and the events (each pose,
+            the end), on a worker thread.
         on_skip: called with a line for each pose of a robot-driven plan left out because the
             robot cannot reach it (:func:`~ftcomp.session.robot_driven.record_poses`); the
             session goes on.
@@ -316,18 +329,19 @@ def record(
     """
     output = check_writable(config.output, overwrite=config.overwrite)
     mount = mount if mount is not None else Mount()
+    channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
     file = _SampleFile(output, config.encoding)
     plan = config.plan
 
     thread = ObserverThread(observers) if observers else None
     if thread is not None:
-        thread.open(OBSERVED_COLUMNS)
+        thread.open((*OBSERVED_COLUMNS, *channels))
 
     def recorded(event: PoseEvent) -> None:
         if event.record is not None:
             file.add(event.record)
             if thread is not None:
-                _observe(thread, event.record, len(file.records), plan.n_poses)
+                _observe(thread, event.record, len(file.records), plan.n_poses, channels)
         if on_event is not None:
             on_event(event)
 
@@ -397,7 +411,13 @@ def _run_plan(
             )
         else:
             recorder = ManualRecorder(
-                plan.n_poses, plan.still, recorded, samples_per_pose=plan.samples_per_pose
+                plan.n_poses,
+                plan.still,
+                recorded,
+                samples_per_pose=plan.samples_per_pose,
+                extra_channels=(
+                    sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
+                ),
             )
             cycle = ControlCycle(robot, sensor, mount=mount, every_reading=True)
             run_loop(cycle, recorder, clock=clock)

@@ -173,5 +173,6 @@ def record_poses(
                 mount.sensor_pose(at.p_base_tcp, at.R_base_tcp)[0],
                 samples.wrench_sensor,
                 np.round(samples.t * 1e9).astype(np.int64),
+                samples.extras,
             )
         )
