@@ -16,6 +16,7 @@ silent (its process stopped), which libfranka reports as it would on a real arm.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -94,13 +95,14 @@ def sim() -> Iterator[Sim]:
         env=env,
         start_new_session=True,  # its own process group: timeout and the simulator
     )
+    drain: Drain | None = None
     try:
         assert proc.stdout is not None
         deadline = time.monotonic() + 60.0
         seen = ""
         while READY not in seen:
             if time.monotonic() > deadline or proc.poll() is not None:
-                proc.kill()
+                _kill_group(proc)
                 _, err = proc.communicate(timeout=5)
                 pytest.fail(f"franky-sim did not start: {seen[-500:]}{err[-2000:]}")
             ready, _, _ = select.select([proc.stdout], [], [], 0.5)
@@ -109,13 +111,17 @@ def sim() -> Iterator[Sim]:
         drain = Drain(proc)
         yield Sim(address, proc)
     finally:
-        with_group = proc.poll() is None
-        if with_group:
-            os.killpg(proc.pid, signal.SIGCONT)
-            os.killpg(proc.pid, signal.SIGKILL)
+        _kill_group(proc)
         proc.wait(timeout=10)
-        if "drain" in locals():
+        if drain is not None:
             drain.join()
+
+
+def _kill_group(proc: subprocess.Popen[str]) -> None:
+    """Kill the simulator and its ``timeout`` (one process group), stopped or not."""
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(proc.pid, signal.SIGKILL)
+        os.killpg(proc.pid, signal.SIGCONT)  # a stopped process dies once it runs
 
 
 def _angle_deg(R_a: np.ndarray, R_b: np.ndarray) -> float:
