@@ -354,3 +354,20 @@ def test_the_controller_going_silent_ends_run_with_its_line_and_a_complete_log(
     rows = np.loadtxt(log, delimiter=",", skiprows=1, ndmin=2)
     assert len(rows) == result.cycles > 50
     assert np.all(np.isfinite(rows))
+
+
+def test_a_silent_controller_is_seen_by_a_pose_read_while_nothing_moves(sim: Sim) -> None:
+    # stream and a still run read poses and command nothing: the read itself must notice.
+    with open_robot(sim.uri()) as robot:
+        robot.pose()
+        sim.pause()
+        try:
+            t0 = time.monotonic()
+            with pytest.raises(HardwareError, match=r"lost the connection to the arm"):
+                while time.monotonic() - t0 < 5.0:
+                    robot.pose()
+                    robot.wait_cycle()
+            seen_after_s = time.monotonic() - t0
+        finally:
+            sim.resume()
+    assert seen_after_s < 3.0  # libfranka's receive time-out is 1 s
