@@ -25,7 +25,11 @@ with the arm still and nothing touching the tool (:func:`~ftcomp.calibration.reb
 ``~/reload_calibration`` reads ``calibration_file`` again. Both answer ``success`` and a line.
 
 Every callback runs on the runtime's one executor thread, one at a time (a multi-threaded
-executor costs too much per message for a 1 kHz stream: docs/ros2.md, "Benchmark"). A rebias
+executor costs too much per message for a 1 kHz stream: docs/ros2.md, "Benchmark"). The raw
+readings' callback also handles the readings queued behind its own, up to
+:data:`WRENCH_BATCH` (:func:`~ftcomp.ros2.rclpy_runtime.take_queued`): rclpy's executor
+builds its wait set anew for each message it takes, which costs about as much as the
+compensation, so a node that fell behind catches up in a few wake-ups. A rebias
 therefore does not block while it reads: its service callback is a coroutine that opens a
 collection, which the readings' callback fills and closes when ``rebias_s`` has passed (or the
 status timer, a second later, if the readings stopped), and then answers.
@@ -36,7 +40,8 @@ on a change and every second): non-finite values, a ``frame_id`` other than ``se
 no joint states yet or joint states older than ``stale_s``. Its settings are ROS 2 parameters
 (:class:`~ftcomp.ros2.node_config.NodeConfig`'s fields, ``--ros-args -p calibration_file:=...``).
 
-Joint states are not interpolated: each reading takes the newest (``stale_s`` bounds their age).
+Joint states are not interpolated: each reading takes the newest received before it is handled
+(``stale_s`` bounds their age).
 """
 
 from __future__ import annotations
