@@ -28,11 +28,12 @@ from ftcomp.hardware.bota import (
 )
 from ftcomp.hardware.fixed import FixedRobot
 from ftcomp.hardware.protocols import ReportsExtraChannels
-from ftcomp.hardware.registry import open_sensor
+from ftcomp.hardware.registry import open_robot, open_sensor
 from ftcomp.io.samples_csv import read_samples
 from ftcomp.paper import paper_poses
 from ftcomp.session.pose_record import WrenchTolerance
 from ftcomp.session.record import RecordConfig, RobotDriven, record
+from ftcomp.session.stream import StreamConfig, stream, stream_columns
 
 pytest.importorskip("serial")
 
@@ -193,6 +194,19 @@ def test_a_recording_from_the_twins_gen0_face_has_its_temperature_column(
     assert [row[-1] for row in written.rows] == ["30"] * 90  # the face's 30 degC, exactly
 
 
+def test_a_stream_from_the_twins_gen0_face_logs_its_temperature_column(tmp_path: Path) -> None:
+    with serving() as (uri, proc):
+        sensor = open_sensor(uri)
+        say(proc, "go")
+        with sensor, open_robot("fixed://?rate_hz=500") as robot:
+            result = stream(robot, sensor, StreamConfig(0.2), tmp_path / "s.csv")
+    assert result.outcome == "duration" and result.readings > 50
+    lines = (tmp_path / "s.csv").read_text().splitlines()
+    header = tuple(lines[0].split(","))
+    assert header == stream_columns(with_pose=False, compensated=False, extras=GEN0_CHANNELS)
+    assert [line.split(",")[-1] for line in lines[1:]] == ["30"] * result.readings
+
+
 @pytest.mark.parametrize(
     ("fault", "says"),
     [
@@ -249,3 +263,22 @@ def test_bota_dummy_reads_the_vendor_drivers_simulated_sensor() -> None:
     assert np.linalg.norm(acceleration) == pytest.approx(9.81, abs=0.2)  # the newest, one reading
     stamps = [r.t_ns for r in readings]
     assert stamps == sorted(stamps)
+
+
+@pytest.mark.skipif(
+    importlib.util.find_spec("bota_driver") is None,
+    reason="bota-driver (Bota's binary client) has no wheel for this platform",
+)
+def test_a_stream_of_bota_dummy_logs_its_temperature_and_imu_columns(tmp_path: Path) -> None:
+    with open_sensor("bota://dummy") as sensor, open_robot("fixed://?rate_hz=500") as robot:
+        result = stream(robot, sensor, StreamConfig(0.5), tmp_path / "s.csv")
+    assert result.outcome == "duration" and result.readings > 50
+    header = (tmp_path / "s.csv").read_text().splitlines()[0].split(",")
+    assert tuple(header) == stream_columns(
+        with_pose=False, compensated=False, extras=DRIVER_CHANNELS
+    )
+    rows = np.loadtxt(tmp_path / "s.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert np.all(rows[:, header.index("temperature_C")] == 25.0)
+    # gravity on the accelerometer: the mean of the readings (noise as in the test above)
+    accel = rows[:, header.index("accel_x_m_s2") : header.index("accel_z_m_s2") + 1]
+    assert np.linalg.norm(accel.mean(axis=0)) == pytest.approx(9.81, abs=0.05)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import ftcomp
+from channelled_sensor import CHANNELS, ChannelledSensor
 from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import ParameterError
 from ftcomp.frames import R_base_sensor_from
@@ -126,6 +127,20 @@ def test_a_sensor_fault_stops_the_run_in_the_period_that_sees_it_and_keeps_the_l
     _, rows = _read_log(tmp_path / "run.csv")
     assert len(rows) == result.cycles  # every cycle up to the one that stopped is logged
     assert np.all(rows[-1, -7:-1] == 0.0)  # that cycle commanded nothing
+
+
+def test_a_run_logs_each_cycles_extra_channels_from_the_reading_its_wrench_came_from(
+    tool: GravityModel, tmp_path: Path
+) -> None:
+    config = RunConfig(AdmittanceConfig(_limits()), duration_s=0.3)
+    with ftcomp.open_robot(PLACE) as robot, ftcomp.open_sensor("sim://", robot) as sensor:
+        result = run_compliant(robot, ChannelledSensor(sensor), tool, config, tmp_path / "r.csv")
+    assert result.outcome == "duration", result
+    header, rows = _read_log(tmp_path / "r.csv")
+    assert tuple(header) == (*RUN_COLUMNS, *CHANNELS)
+    assert len(rows) == result.cycles > 100
+    # each row's channels are those of the reading whose wrench it logs (they carry its fx, fy)
+    np.testing.assert_array_equal(rows[:, -2:], rows[:, [header.index("fx"), header.index("fy")]])
 
 
 class _FallingBehind:

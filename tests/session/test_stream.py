@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import ftcomp
+from channelled_sensor import CHANNELS, ChannelledSensor
 from ftcomp.compensation.bias_tracking import BiasTrackingConfig
 from ftcomp.compensation.pipeline import Compensated
 from ftcomp.control.loop import Reading
@@ -41,6 +42,23 @@ def test_a_stream_logs_every_reading_compensated_with_its_pose(tmp_path: Path) -
     assert np.all(np.abs(contact.mean(axis=0)) < 0.05)
     assert progress and progress[-1].readings <= result.readings
     assert all(p.duration_s == 0.5 and p.lost_packets is None for p in progress)
+
+
+def test_a_stream_logs_each_readings_extra_channels_last(tmp_path: Path) -> None:
+    with ftcomp.open_robot("sim://?seed=4") as robot, ftcomp.open_sensor("sim://", robot) as sensor:
+        tool = robot.true_gravity_model()  # type: ignore[attr-defined]
+        config = StreamConfig(0.2)
+        result = stream(
+            robot, ChannelledSensor(sensor), config, tmp_path / "s.csv", calibration=tool
+        )
+    assert result.outcome == "duration"
+    header = (tmp_path / "s.csv").read_text().splitlines()[0].split(",")
+    assert tuple(header) == stream_columns(with_pose=True, compensated=True, extras=CHANNELS)
+    assert header[-2:] == ["temperature_C", "accel_x_m_s2"]
+    rows = np.loadtxt(tmp_path / "s.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert len(rows) == result.readings > 100
+    # every row the channels of its own reading (they carry its fx, fy: 10 digits both)
+    np.testing.assert_array_equal(rows[:, -2:], rows[:, 1:3])
 
 
 def _reading(now_ns: int, stamps: range = range(0)) -> Reading:

@@ -47,7 +47,7 @@ from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import quat_from_matrix
 from ftcomp.hardware.pacing import TimingSummary
-from ftcomp.hardware.protocols import Mount, Robot, TakesControl, WrenchSensor
+from ftcomp.hardware.protocols import Mount, ReportsExtraChannels, Robot, TakesControl, WrenchSensor
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
 from ftcomp.session.compliant import DEFAULT_HOLD_S, CompliantStep, CycleRecord, SettleRule
@@ -366,8 +366,10 @@ def run_compliant(
             has them) to compensate with, or a bare gravity model.
         config: the run.
         log_path: the CSV log (:data:`RUN_COLUMNS`, with ``online_load`` then
-            :data:`~ftcomp.compensation.online.LOAD_COLUMNS`), written atomically; the caller
-            checks it may be written.
+            :data:`~ftcomp.compensation.online.LOAD_COLUMNS`, with the bias tracked
+            ``bias_updated``, from a sensor with extra channels
+            (:class:`~ftcomp.hardware.protocols.ReportsExtraChannels`) their values in the frame
+            of the cycle's wrench), written atomically; the caller checks it may be written.
         mount: the sensor frame on the TCP (identity by default).
         source: names the calibration in errors.
         observers: see every log row (stamped with the cycle's ``now_ns``) and the events (the
@@ -397,6 +399,8 @@ def run_compliant(
     columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if load is not None else RUN_COLUMNS
     if tracker is not None:
         columns = (*columns, "bias_updated")
+    channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
+    columns = (*columns, *channels)
     summary = _Summary(config.final_error_window_s)
     outcome, message = Outcome.DURATION, ""
     with (
@@ -420,6 +424,8 @@ def run_compliant(
                     row += load.update(t_s)
                 if tracker is not None:  # the same cycle's: the next read has not run yet
                     row.append(1.0 if tracker.updated else 0.0)
+                if channels:
+                    row += r.extras
                 log.write(row, r.now_ns)
                 summary.add(record)
 

@@ -6,7 +6,9 @@ the duration is up, the recording ends (a replay) or a fault or Ctrl-C stops it,
 new reading (``sensor.read_new``), so the log has the sensor's rate whatever the loop's, one row
 per reading (:func:`stream_columns`): the raw wrench and, with a pose, the sensor's orientation
 and origin (a valid sample CSV); with a calibration the contact wrench; with ``online_load`` the
-contact wrench with a grasped load weighed online and removed, and the load estimate. The loop's
+contact wrench with a grasped load weighed online and removed, and the load estimate; from a
+sensor with extra channels (:class:`~ftcomp.hardware.protocols.ReportsExtraChannels`: its
+temperature, an IMU) their values in each reading's frame, last. The loop's
 cycle takes every reading and puts each through its one wrench pipeline
 (:class:`~ftcomp.compensation.pipeline.WrenchPipeline`, as ``ftcomp run``'s cycle does with its
 newest); the stream only logs what the cycle computed.
@@ -36,6 +38,7 @@ from ftcomp.hardware.pacing import TimingSummary
 from ftcomp.hardware.protocols import (
     CountsLostPackets,
     Mount,
+    ReportsExtraChannels,
     ReportsStreamHealth,
     Robot,
     StreamHealth,
@@ -62,19 +65,25 @@ Row = Sequence[float]
 
 
 def stream_columns(
-    *, with_pose: bool, compensated: bool, online_load: bool = False, tracked: bool = False
+    *,
+    with_pose: bool,
+    compensated: bool,
+    online_load: bool = False,
+    tracked: bool = False,
+    extras: tuple[str, ...] = (),
 ) -> tuple[str, ...]:
     """Columns of ``ftcomp stream``'s log: ``t`` [s, session clock], the raw wrench, with a pose
     the sensor's orientation (``qx,qy,qz,qw``) and origin (``px,py,pz`` [m], base frame), when
     compensating the contact wrench ``cfx..ctz``, and with ``online_load`` (compensating) the
     load estimate (:data:`~ftcomp.compensation.online.LOAD_COLUMNS`), with the bias tracked
-    ``bias_updated`` (1 in a row whose reading moved the tracked bias). With a pose it is a
-    valid sample CSV."""
+    ``bias_updated`` (1 in a row whose reading moved the tracked bias), then the sensor's
+    ``extras`` (:attr:`~ftcomp.hardware.protocols.ReportsExtraChannels.extra_channels`,
+    ``temperature_C``...). With a pose it is a valid sample CSV."""
     pose = ("qx", "qy", "qz", "qw", "px", "py", "pz") if with_pose else ()
     contact = tuple(f"c{c}" for c in WRENCH_COLUMNS) if compensated or online_load else ()
     load = LOAD_COLUMNS if online_load else ()
     tracking = ("bias_updated",) if tracked else ()
-    return ("t", *WRENCH_COLUMNS, *pose, *contact, *load, *tracking)
+    return ("t", *WRENCH_COLUMNS, *pose, *contact, *load, *tracking, *extras)
 
 
 class StreamLogger:
@@ -90,6 +99,7 @@ class StreamLogger:
         compensated: log the contact wrench.
         online: log the online load's columns.
         tracked: log whether each reading moved the tracked bias.
+        extras: log each reading's extra channels (its sensor's, last).
     """
 
     def __init__(
@@ -101,11 +111,13 @@ class StreamLogger:
         compensated: bool = False,
         online: bool = False,
         tracked: bool = False,
+        extras: bool = False,
     ) -> None:
         if not (math.isfinite(duration_s) and duration_s > 0.0):
             raise ParameterError(f"the duration must be > 0 s, got {duration_s}")
         self.write_row, self.with_pose = write_row, with_pose
         self.compensated, self.online, self.tracked = compensated or online, online, tracked
+        self.extras = extras
         self.duration_ns = round(duration_s * 1e9)
         self.t0_ns: int | None = None
         self.count = 0
@@ -148,6 +160,8 @@ class StreamLogger:
             if self.tracked:
                 row.append(1.0 if c.bias_updated else 0.0)
                 self.bias_updates += 1 if c.bias_updated else 0
+            if self.extras:
+                row += c.extras
             self.count += 1
             self.write_row(row)
 
@@ -343,11 +357,13 @@ def stream(
         compensator = GravityCompensator(calibration) if calibration is not None else None
         pipeline = WrenchPipeline(compensator, bias_tracker=tracker)
     online = config.online_load
+    channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
     columns = stream_columns(
         with_pose=with_pose,
         compensated=calibration is not None,
         online_load=online,
         tracked=tracker is not None,
+        extras=channels,
     )
     lost = sensor if isinstance(sensor, CountsLostPackets) else None
 
@@ -376,6 +392,7 @@ def stream(
             compensated=calibration is not None,
             online=online,
             tracked=tracker is not None,
+            extras=bool(channels),
         )
 
         cycle = ControlCycle(robot, sensor, mount=mount, pipeline=pipeline, every_reading=True)
