@@ -315,10 +315,12 @@ class CompensationNode:
         """The raw subscription's callback: this reading, then up to :data:`WRENCH_BATCH` - 1
         queued behind it, in order, in one of the executor's wake-ups (:func:`take_queued`),
         each with the joint states that arrived before it was handled."""
-        pose = self._pose
+        pose, subscription = self._pose, self._wrenches
         assert pose is not None
         self._on_wrench(msg, info)
-        for queued in take_queued(self._wrenches, WRENCH_BATCH - 1):
+        if subscription is None:  # the executor's thread ran it before _start kept it
+            return
+        for queued in take_queued(subscription, WRENCH_BATCH - 1):
             pose.catch_up()
             self._on_wrench(*queued)
 
