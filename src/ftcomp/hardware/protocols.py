@@ -105,7 +105,8 @@ class WrenchSample:
 
     def __post_init__(self) -> None:
         freeze_field(self, "wrench_sensor", (6,))
-        object.__setattr__(self, "extras", tuple(float(v) for v in self.extras))
+        if self.extras != ():  # none, the common case, costs nothing (a simulated 1 kHz sensor)
+            object.__setattr__(self, "extras", tuple(float(v) for v in self.extras))
 
     @property
     def t_s(self) -> float:
