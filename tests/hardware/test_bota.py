@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from rosbags.highlevel import AnyReader
 
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.bota import (
@@ -31,6 +32,7 @@ from ftcomp.hardware.protocols import ReportsExtraChannels
 from ftcomp.hardware.registry import open_robot, open_sensor
 from ftcomp.io.samples_csv import read_samples
 from ftcomp.paper import paper_poses
+from ftcomp.ros2.mcap_log import SessionMcapLog
 from ftcomp.session.pose_record import WrenchTolerance
 from ftcomp.session.record import RecordConfig, RobotDriven, record
 from ftcomp.session.stream import StreamConfig, stream, stream_columns
@@ -270,8 +272,9 @@ def test_bota_dummy_reads_the_vendor_drivers_simulated_sensor() -> None:
     reason="bota-driver (Bota's binary client) has no wheel for this platform",
 )
 def test_a_stream_of_bota_dummy_logs_its_temperature_and_imu_columns(tmp_path: Path) -> None:
+    mcap = SessionMcapLog(tmp_path / "s.mcap")
     with open_sensor("bota://dummy") as sensor, open_robot("fixed://?rate_hz=500") as robot:
-        result = stream(robot, sensor, StreamConfig(0.5), tmp_path / "s.csv")
+        result = stream(robot, sensor, StreamConfig(0.5), tmp_path / "s.csv", observers=[mcap])
     assert result.outcome == "duration" and result.readings > 50
     header = (tmp_path / "s.csv").read_text().splitlines()[0].split(",")
     assert tuple(header) == stream_columns(
@@ -282,3 +285,17 @@ def test_a_stream_of_bota_dummy_logs_its_temperature_and_imu_columns(tmp_path: P
     # gravity on the accelerometer: the mean of the readings (noise as in the test above)
     accel = rows[:, header.index("accel_x_m_s2") : header.index("accel_z_m_s2") + 1]
     assert np.linalg.norm(accel.mean(axis=0)) == pytest.approx(9.81, abs=0.05)
+    # the MCAP log: a Temperature and an Imu message per row, the CSV's values
+    with AnyReader([tmp_path / "s.mcap"]) as reader:
+        found: dict[str, list] = {"/ftcomp/temperature": [], "/ftcomp/imu": []}
+        for conn, _, raw in reader.messages():
+            if conn.topic in found:
+                found[conn.topic].append(reader.deserialize(raw, conn.msgtype))
+    assert [m.temperature for m in found["/ftcomp/temperature"]] == [25.0] * len(rows)
+    imu = np.array(
+        [
+            [m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
+            for m in found["/ftcomp/imu"]
+        ]
+    )
+    np.testing.assert_allclose(imu, accel, rtol=1e-9)  # the CSV's 10 significant digits

@@ -16,11 +16,13 @@ from ftcomp.cli import main
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.control.loop import Reading
 from ftcomp.errors import ParameterError
+from ftcomp.hardware.bota import DRIVER_CHANNELS
 from ftcomp.io.calibration_json import save_calibration
 from ftcomp.model import GravityModel
 from ftcomp.ros2.mcap_log import SESSION_TOPICS, TOPICS, McapLog, SessionMcapLog
 from ftcomp.session.compliant import CycleRecord
 from ftcomp.session.run import RUN_COLUMNS, cycle_row
+from ftcomp.session.stream import stream_columns
 
 from conftest import synthetic_samples
 
@@ -123,3 +125,28 @@ def test_sim_place_log_reads_back_with_every_topic_and_message_count(
         R = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix()
         expected = compensator.compensate(_vec(raw.force) + _vec(raw.torque), R)
         np.testing.assert_allclose(_vec(comp.force) + _vec(comp.torque), expected, atol=1e-9)
+
+
+def test_a_sensors_extra_channels_are_temperature_and_imu_messages_of_each_row(
+    tmp_path: Path,
+) -> None:
+    columns = stream_columns(with_pose=False, compensated=False, extras=DRIVER_CHANNELS)
+    rng = np.random.default_rng(36)
+    rows = [[k * 1e-3, *rng.normal(size=6), 30.0 + k, *rng.normal(size=6)] for k in range(5)]
+    with SessionMcapLog(tmp_path / "s.mcap") as log:
+        log.open(columns)
+        for row in rows:
+            log.row(round(row[0] * 1e9), row)
+    messages = _read(tmp_path / "s.mcap")
+    assert set(messages) == {
+        "/ftcomp/wrench_raw",
+        "/ftcomp/temperature",
+        "/ftcomp/imu",
+    }
+    temperatures = [m.temperature for _, m in messages["/ftcomp/temperature"]]  # type: ignore[attr-defined]
+    assert temperatures == [row[7] for row in rows]
+    for (t_ns, imu), row in zip(messages["/ftcomp/imu"], rows, strict=True):
+        a, w = imu.linear_acceleration, imu.angular_velocity  # type: ignore[attr-defined]
+        assert [a.x, a.y, a.z, w.x, w.y, w.z] == row[8:]
+        assert imu.orientation_covariance[0] == -1.0  # type: ignore[attr-defined]
+        assert imu.header.frame_id == "ft_sensor" and t_ns == round(row[0] * 1e9)  # type: ignore[attr-defined]

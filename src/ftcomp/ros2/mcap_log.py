@@ -15,11 +15,18 @@ topic                           type                                 columns
 ``/ftcomp/wrench_error``        ``geometry_msgs/msg/WrenchStamped``  ``ex..etz`` (control frame)
 ``/ftcomp/twist_command``       ``geometry_msgs/msg/TwistStamped``   ``vx..wz`` (base frame)
 ``/ftcomp/load``                ``std_msgs/msg/Float64MultiArray``   the online load's columns
+``/ftcomp/temperature``         ``sensor_msgs/msg/Temperature``      ``temperature_C``
+``/ftcomp/imu``                 ``sensor_msgs/msg/Imu``              ``accel_x_m_s2..z``,
+                                                                     ``gyro_x_rad_s..z``
 ``/ftcomp/events``              ``rcl_interfaces/msg/Log``           events (pose, grasp, end)
 ==============================  ===================================  ===========================
 
-A row's stamp (its ``t_ns``) is every message's log time and header stamp, except the wrenches
-of a ``run`` or ``sim place`` log, stamped with the sample's own time (``t_sample_s``). Log times
+The temperature and IMU channels are a sensor's extra channels
+(:class:`~ftcomp.hardware.protocols.ReportsExtraChannels`), in the sensor frame; an IMU message
+has no orientation (``orientation_covariance[0] = -1``, as ``sensor_msgs/Imu`` says of an
+unknown one) and unknown covariances (zeros). A row's stamp (its ``t_ns``) is every message's
+log time and header stamp, except the wrenches, temperature and IMU of a ``run`` or ``sim
+place`` log, stamped with the sample's own time (``t_sample_s``). Log times
 are the session clock: simulation time for ``sim://``, so a simulated run starts near
 1970-01-01 in a viewer.
 
@@ -67,6 +74,8 @@ SESSION_TOPICS: dict[str, str] = {
     **TOPICS,
     "/ftcomp/wrench_error": WRENCH,
     "/ftcomp/load": "std_msgs/msg/Float64MultiArray",
+    "/ftcomp/temperature": "sensor_msgs/msg/Temperature",
+    "/ftcomp/imu": "sensor_msgs/msg/Imu",
     "/ftcomp/events": "rcl_interfaces/msg/Log",
 }
 _WRENCH = ("fx", "fy", "fz", "tx", "ty", "tz")
@@ -77,6 +86,15 @@ CHANNEL_COLUMNS: dict[str, tuple[str, ...]] = {
     "/tf": ("qx", "qy", "qz", "qw", "px", "py", "pz"),
     "/ftcomp/wrench_error": ("ex", "ey", "ez", "etx", "ety", "etz"),
     "/ftcomp/twist_command": ("vx", "vy", "vz", "wx", "wy", "wz"),
+    "/ftcomp/temperature": ("temperature_C",),
+    "/ftcomp/imu": (
+        "accel_x_m_s2",
+        "accel_y_m_s2",
+        "accel_z_m_s2",
+        "gyro_x_rad_s",
+        "gyro_y_rad_s",
+        "gyro_z_rad_s",
+    ),
 }
 LOAD_TOPIC = "/ftcomp/load"
 
@@ -223,6 +241,28 @@ class McapLog:
             header=self._header(t_ns, self.base_frame), twist=body
         )
 
+    def _temperature(self, t_ns: int, temperature_C: float) -> Any:
+        return self._T["sensor_msgs/msg/Temperature"](
+            header=self._header(t_ns, self.sensor_frame),
+            temperature=float(temperature_C),
+            variance=0.0,
+        )
+
+    def _imu(self, t_ns: int, accel_gyro: Values) -> Any:
+        T = self._T
+        unknown = np.zeros(9)
+        no_orientation = np.zeros(9)
+        no_orientation[0] = -1.0  # sensor_msgs/Imu: the orientation is not estimated
+        return T["sensor_msgs/msg/Imu"](
+            header=self._header(t_ns, self.sensor_frame),
+            orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+            orientation_covariance=no_orientation,
+            angular_velocity=self._vector(accel_gyro[3:]),
+            angular_velocity_covariance=unknown,
+            linear_acceleration=self._vector(accel_gyro[:3]),
+            linear_acceleration_covariance=unknown,
+        )
+
     def write(self, topic: str, log_ns: int, message: Any) -> None:
         """Serialise ``message`` (CDR) and write it on ``topic`` at log time ``log_ns``."""
         if self._writer is None:
@@ -303,6 +343,10 @@ class SessionMcapLog(McapLog):
                 message = self._twist(now, values)
             elif topic == "/ftcomp/wrench_error":
                 message = self._wrench(now, values, self.control_frame)
+            elif topic == "/ftcomp/temperature":
+                message = self._temperature(t_sample, values[0])
+            elif topic == "/ftcomp/imu":
+                message = self._imu(t_sample, values)
             else:
                 message = self._wrench(t_sample, values)
             self.write(topic, now, message)
