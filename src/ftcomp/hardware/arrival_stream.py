@@ -12,7 +12,6 @@ than ``timeout_s``. A reading is never made from a frame that failed its check.
 from __future__ import annotations
 
 import collections
-import math
 import threading
 import time
 from types import TracebackType
@@ -24,7 +23,7 @@ from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.protocols import WrenchSample
 from ftcomp.hardware.registry import Uri
 
-__all__ = ["ArrivalStream", "import_serial", "positive_option"]
+__all__ = ["ArrivalStream", "import_serial"]
 
 #: Readings kept for :meth:`ArrivalStream.read_new` between two calls.
 _BACKLOG: Final = 20_000
@@ -39,14 +38,6 @@ def import_serial(what: str, extra: str) -> Any:
             f"{what} needs the pyserial package: pip install 'ftcomp[{extra}]'"
         ) from None
     return serial
-
-
-def positive_option(uri: Uri, name: str, value: float | None) -> float:
-    """A URI option that must be a finite number > 0."""
-    assert value is not None  # every option given here has a default
-    if not (math.isfinite(value) and value > 0.0):
-        raise ParameterError(f"{uri.text!r}: {name} must be > 0, got {value:g}")
-    return value
 
 
 class ArrivalStream:

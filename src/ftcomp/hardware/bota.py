@@ -46,7 +46,7 @@ from typing import Any, Final
 import numpy as np
 
 from ftcomp.errors import HardwareError, ParameterError
-from ftcomp.hardware.arrival_stream import ArrivalStream, import_serial, positive_option
+from ftcomp.hardware.arrival_stream import ArrivalStream, import_serial
 from ftcomp.hardware.pacing import on_host_clock
 from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.hardware.registry import Uri
@@ -333,8 +333,8 @@ def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
         )
     options = uri.reader()
     baud = options.integer("baud", GEN0_BAUD_RATE) if not uri.host else GEN0_BAUD_RATE
-    timeout_s = positive_option(uri, "timeout_s", options.number("timeout_s", 0.1))
-    connect_s = positive_option(uri, "connect_timeout_s", options.number("connect_timeout_s", 5.0))
+    timeout_s = options.positive("timeout_s", 0.1)
+    connect_s = options.positive("connect_timeout_s", 5.0)
     options.done()
     if uri.host:
         return BotaDriverSensor(uri, uri.host, timeout_s=timeout_s, connect_timeout_s=connect_s)

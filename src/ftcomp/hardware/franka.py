@@ -470,13 +470,6 @@ def set_load(
     return before, after
 
 
-def _positive(uri: Uri, name: str, value: float | None) -> float:
-    assert value is not None
-    if not (math.isfinite(value) and value > 0.0):
-        raise ParameterError(f"{uri.text!r}: {name} must be > 0, got {value:g}")
-    return value
-
-
 def open_robot(uri: Uri) -> Robot:
     """A Franka arm from its URI (connects when entered)."""
     if not uri.host:
@@ -484,12 +477,12 @@ def open_robot(uri: Uri) -> Robot:
     if uri.port is not None or uri.path not in ("", "/"):
         raise ParameterError(f"{uri.text!r}: franka:// takes a host only (FCI is on port 1337)")
     options = uri.reader()
-    frequency = _positive(uri, "frequency_hz", options.number("frequency_hz", 200.0))
-    dynamics = _positive(uri, "dynamics", options.number("dynamics", 0.1))
+    frequency = options.positive("frequency_hz", 200.0)
+    dynamics = options.positive("dynamics", 0.1)
     realtime = options.text("realtime", "enforce", ("enforce", "ignore"))
     recover = options.flag("recover", False)
-    torque = _positive(uri, "collision_torque_nm", options.number("collision_torque_nm", 20.0))
-    force = _positive(uri, "collision_force_n", options.number("collision_force_n", 30.0))
+    torque = options.positive("collision_torque_nm", 20.0)
+    force = options.positive("collision_force_n", 30.0)
     options.done()
     if not 1.0 <= frequency <= 1000.0:
         raise ParameterError(f"{uri.text!r}: frequency_hz must be in [1, 1000], got {frequency:g}")

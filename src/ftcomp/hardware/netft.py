@@ -35,7 +35,6 @@ gravity-aware at any still pose with ``ftcomp rebias``.
 from __future__ import annotations
 
 import collections
-import math
 import time
 from types import TracebackType
 from typing import TYPE_CHECKING, Any
@@ -328,13 +327,6 @@ class NetFTSensor:
         )
 
 
-def _positive(uri: Uri, name: str, value: float | None) -> float:
-    assert value is not None  # every option here has a default
-    if not (math.isfinite(value) and value > 0.0):
-        raise ParameterError(f"{uri.text!r}: {name} must be > 0, got {value:g}")
-    return value
-
-
 def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
     """A Net F/T sensor from its URI (not connected until entered).
 
@@ -352,8 +344,8 @@ def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
         )
     options = uri.reader()
     http_port = options.integer("http_port", 80)
-    timeout_s = _positive(uri, "timeout_s", options.number("timeout_s", 0.1))
-    connect_s = _positive(uri, "connect_timeout_s", options.number("connect_timeout_s", 2.0))
+    timeout_s = options.positive("timeout_s", 0.1)
+    connect_s = options.positive("connect_timeout_s", 2.0)
     bias = options.flag("bias", False)
     options.done()
     rdt_port = uri.port if uri.port is not None else _DEFAULT_RDT_PORT

@@ -134,6 +134,14 @@ class Options:
             raise self._bad(key, value, "a finite number")
         return number
 
+    def positive(self, key: str, default: float) -> float:
+        """One finite number > 0."""
+        number = self.number(key, default)
+        assert number is not None  # a default is given
+        if not number > 0.0:
+            raise ParameterError(f"{self._uri.text!r}: {key} must be > 0, got {number:g}")
+        return number
+
     def integer(self, key: str, default: int) -> int:
         """A whole number."""
         value = self._take(key)

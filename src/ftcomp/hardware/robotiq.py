@@ -47,7 +47,7 @@ from typing import Any, Final
 import numpy as np
 
 from ftcomp.errors import HardwareError, ParameterError
-from ftcomp.hardware.arrival_stream import ArrivalStream, import_serial, positive_option
+from ftcomp.hardware.arrival_stream import ArrivalStream, import_serial
 from ftcomp.hardware.pacing import on_host_clock
 from ftcomp.hardware.protocols import Robot, WrenchSensor
 from ftcomp.hardware.registry import Uri
@@ -358,8 +358,8 @@ def open_sensor(uri: Uri, robot: Robot | None) -> WrenchSensor:
             "a session with this robot (simulated time); use it with ur:// or alone"
         )
     options = uri.reader()
-    timeout_s = positive_option(uri, "timeout_s", options.number("timeout_s", 0.1))
-    connect_s = positive_option(uri, "connect_timeout_s", options.number("connect_timeout_s", 2.0))
+    timeout_s = options.positive("timeout_s", 0.1)
+    connect_s = options.positive("connect_timeout_s", 2.0)
     options.done()
     if uri.host:
         port = uri.port if uri.port is not None else URCAP_PORT

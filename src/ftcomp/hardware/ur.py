@@ -675,13 +675,6 @@ def set_payload(
 _MAX_PAYLOAD_KG: Final = 100.0
 
 
-def _option_positive(uri: Uri, name: str, value: float | None) -> float:
-    assert value is not None
-    if not (math.isfinite(value) and value > 0.0):
-        raise ParameterError(f"{uri.text!r}: {name} must be > 0, got {value:g}")
-    return value
-
-
 def open_robot(uri: Uri) -> Robot:
     """A UR arm from its URI (connects when entered)."""
     if not uri.host:
@@ -690,11 +683,11 @@ def open_robot(uri: Uri) -> Robot:
         raise ParameterError(f"{uri.text!r}: ur:// takes a host only (RTDE is on port 30004)")
     options = uri.reader()
     frequency = options.number("frequency_hz", None)
-    speed = _option_positive(uri, "max_speed_mm_s", options.number("max_speed_mm_s", 100.0))
-    accel = _option_positive(uri, "max_accel_mm_s2", options.number("max_accel_mm_s2", 500.0))
+    speed = options.positive("max_speed_mm_s", 100.0)
+    accel = options.positive("max_accel_mm_s2", 500.0)
     command = options.text("command", "speedl", ("speedl", "servol"))
-    timeout_s = _option_positive(uri, "timeout_s", options.number("timeout_s", 0.5))
-    connect_s = _option_positive(uri, "connect_timeout_s", options.number("connect_timeout_s", 2.0))
+    timeout_s = options.positive("timeout_s", 0.5)
+    connect_s = options.positive("connect_timeout_s", 2.0)
     options.done()
     if frequency is not None and not 1.0 <= frequency <= 500.0:
         raise ParameterError(f"{uri.text!r}: frequency_hz must be in [1, 500], got {frequency:g}")
