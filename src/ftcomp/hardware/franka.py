@@ -325,22 +325,13 @@ class FrankaRobot(LatenessOfPacer):
         Raises:
             HardwareError: still moving after ``max_duration_s``, or a fault.
         """
-        t0 = time.monotonic()
-        still_since: float | None = None
-        while True:
-            now = time.monotonic()
-            linear, angular = self.end_effector_speed()
-            if linear < _STILL_M_S and angular < _STILL_RAD_S:
-                still_since = now if still_since is None else still_since
-                if now - still_since >= _STILL_FOR_S:
-                    return now - t0
-            else:
-                still_since = None
-            if now - t0 > max_duration_s:
-                raise HardwareError(
-                    f"{self.uri.text!r}: the arm did not come to rest within {max_duration_s:g} s"
-                )
-            self.pacer.sleep()
+        return self.pacer.wait_at_rest(
+            self._end_effector_still, _STILL_FOR_S, max_duration_s, repr(self.uri.text)
+        )
+
+    def _end_effector_still(self) -> bool:
+        linear, angular = self.end_effector_speed()
+        return linear < _STILL_M_S and angular < _STILL_RAD_S
 
     def command_twist(self, twist_base: NDArray[np.float64]) -> None:
         """Hand franky a Cartesian velocity motion holding this end effector twist (base frame)

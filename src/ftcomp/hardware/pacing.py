@@ -64,7 +64,7 @@ from typing import Final
 import numpy as np
 from numpy.typing import NDArray
 
-from ftcomp.errors import ParameterError
+from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.protocols import HOST_CLOCK, Robot
 
 _log = logging.getLogger(__name__)
@@ -186,6 +186,32 @@ class RateLimiter:
         else:  # the schedule kept: the next period is shorter by the overrun
             self._next += self.period_s
         return slack
+
+    def wait_at_rest(
+        self, is_still: Callable[[], bool], hold_s: float, max_duration_s: float, robot: str
+    ) -> float:
+        """A robot's ``settle``: poll ``is_still()`` once a period until it has held for
+        ``hold_s`` [s]; return the time taken [s].
+
+        Raises:
+            HardwareError: not still for ``hold_s`` within ``max_duration_s`` [s] (the message
+                starts with ``robot``, its URI).
+        """
+        t0 = self._clock()
+        still_since: float | None = None
+        while True:
+            now = self._clock()
+            if is_still():
+                still_since = now if still_since is None else still_since
+                if now - still_since >= hold_s:
+                    return now - t0
+            else:
+                still_since = None
+            if now - t0 > max_duration_s:
+                raise HardwareError(
+                    f"{robot}: the arm did not come to rest within {max_duration_s:g} s"
+                )
+            self.sleep()
 
     def restart(self) -> None:
         """A new schedule from now with nothing owed: a loop starts (the time since the last

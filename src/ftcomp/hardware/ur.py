@@ -429,21 +429,12 @@ class URRobot(LatenessOfPacer):
         Raises:
             HardwareError: still moving after ``max_duration_s``.
         """
-        t0 = time.monotonic()
-        still_since: float | None = None
-        while True:
-            now = time.monotonic()
-            if self.joint_speed_rad_s() < _STILL_QD_RAD_S:
-                still_since = now if still_since is None else still_since
-                if now - still_since >= _STILL_FOR_S:
-                    return now - t0
-            else:
-                still_since = None
-            if now - t0 > max_duration_s:
-                raise HardwareError(
-                    f"{self.uri.text!r}: the arm did not come to rest within {max_duration_s:g} s"
-                )
-            self.pacer.sleep()
+        return self.pacer.wait_at_rest(
+            lambda: self.joint_speed_rad_s() < _STILL_QD_RAD_S,
+            _STILL_FOR_S,
+            max_duration_s,
+            repr(self.uri.text),
+        )
 
     def command_twist(self, twist_base: NDArray[np.float64]) -> None:
         """Send the TCP twist (base frame) by speedL, or by servoL to the integrated pose.
