@@ -4,9 +4,7 @@ channels equal its raw ``fx`` and ``fy`` holds the values of the frame its wrenc
 
 from __future__ import annotations
 
-from types import TracebackType
-
-from ftcomp.hardware.protocols import WrenchSample, WrenchSensor
+from ftcomp.hardware.protocols import NothingToClose, WrenchSample, WrenchSensor
 
 CHANNELS = ("temperature_C", "accel_x_m_s2")
 
@@ -16,7 +14,7 @@ def _with_channels(sample: WrenchSample) -> WrenchSample:
     return WrenchSample(sample.t_ns, w, (float(w[0]), float(w[1])))
 
 
-class ChannelledSensor:
+class ChannelledSensor(NothingToClose):
     """``sensor`` (entered by the caller) whose readings carry :data:`CHANNELS`
     (a :class:`~ftcomp.hardware.protocols.ReportsExtraChannels` sensor)."""
 
@@ -24,17 +22,6 @@ class ChannelledSensor:
 
     def __init__(self, sensor: WrenchSensor) -> None:
         self.sensor = sensor
-
-    def __enter__(self) -> ChannelledSensor:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        pass
 
     def read(self) -> WrenchSample:
         return _with_channels(self.sensor.read())

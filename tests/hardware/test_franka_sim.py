@@ -27,7 +27,6 @@ import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
-from types import TracebackType
 
 import numpy as np
 import pytest
@@ -38,7 +37,7 @@ from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.franka import FrankaRobot, fault_line
-from ftcomp.hardware.protocols import ReportsLateness, WrenchSample
+from ftcomp.hardware.protocols import NothingToClose, ReportsLateness, WrenchSample
 from ftcomp.hardware.registry import open_robot
 from ftcomp.io.calibration_json import FORMAT
 from ftcomp.io.dynamic_json import FORMAT as DYNAMIC_FORMAT
@@ -283,24 +282,13 @@ def test_payload_set_writes_the_calibrations_load_through_the_mount_and_the_hand
     ), said
 
 
-class _SteadyPush:
+class _SteadyPush(NothingToClose):
     """A wrist sensor stand-in on the host's clock: a constant push of ``force_N`` along the
     sensor's z with a little noise (a repeated reading is a frozen sensor's), no tool."""
 
     def __init__(self, force_N: float, seed: int) -> None:
         self._rng = np.random.default_rng(seed)
         self._force_N = force_N
-
-    def __enter__(self) -> _SteadyPush:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        return None
 
     def read(self) -> WrenchSample:
         wrench = self._rng.normal(0.0, 0.01, 6)

@@ -48,7 +48,7 @@ import numpy as np
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.arrival_stream import ArrivalStream, import_serial
 from ftcomp.hardware.pacing import on_host_clock
-from ftcomp.hardware.protocols import Robot, WrenchSensor
+from ftcomp.hardware.protocols import IMU_CHANNELS, TEMPERATURE_CHANNEL, Robot, WrenchSensor
 from ftcomp.hardware.registry import Uri
 
 __all__ = [
@@ -74,17 +74,9 @@ GEN0_FRAME_SIZE: Final = 1 + 2 + 24 + 4 + 4 + 2
 #: The status word's bits, by name (bit 0 first).
 STATUS_BITS: Final = ("skipped", "overrange", "invalid", "raw")
 #: The extra channels of a Gen0 serial frame (:class:`BotaSerialSensor`).
-GEN0_CHANNELS: Final = ("temperature_C",)
+GEN0_CHANNELS: Final = (TEMPERATURE_CHANNEL,)
 #: The extra channels of a bota-driver frame (:class:`BotaDriverSensor`), sensor frame.
-DRIVER_CHANNELS: Final = (
-    "temperature_C",
-    "accel_x_m_s2",
-    "accel_y_m_s2",
-    "accel_z_m_s2",
-    "gyro_x_rad_s",
-    "gyro_y_rad_s",
-    "gyro_z_rad_s",
-)
+DRIVER_CHANNELS: Final = (TEMPERATURE_CHANNEL, *IMU_CHANNELS)
 #: The bits that end the stream: the values are not a calibrated measurement.
 _FAULT_MASK: Final = 0b1110
 _PAYLOAD: Final = struct.Struct("<H6fIf")

@@ -56,6 +56,8 @@ from ftcomp.frames import cross3
 
 __all__ = [
     "HOST_CLOCK",
+    "IMU_CHANNELS",
+    "TEMPERATURE_CHANNEL",
     "ChecksReachability",
     "ClockName",
     "CountsLostPackets",
@@ -509,6 +511,19 @@ class TaresInHardware(Protocol):
     def tares_in_hardware(self) -> bool:
         """Whether this sensor zeroes its readings when its stream starts."""
         ...
+
+
+#: The extra channels' names, as sensors report them and the logs carry them: a temperature
+#: [degC] and an IMU's acceleration [m/s^2] and angular rate [rad/s] (sensor frame).
+TEMPERATURE_CHANNEL: Final = "temperature_C"
+IMU_CHANNELS: Final = (
+    "accel_x_m_s2",
+    "accel_y_m_s2",
+    "accel_z_m_s2",
+    "gyro_x_rad_s",
+    "gyro_y_rad_s",
+    "gyro_z_rad_s",
+)
 
 
 @runtime_checkable

@@ -54,6 +54,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from ftcomp.errors import ParameterError
+from ftcomp.hardware.protocols import IMU_CHANNELS, TEMPERATURE_CHANNEL
 from ftcomp.ros2.tf import clean_frame
 
 __all__ = ["CHANNEL_COLUMNS", "SESSION_TOPICS", "TOPICS", "McapLog", "RowLayout", "SessionMcapLog"]
@@ -86,15 +87,8 @@ CHANNEL_COLUMNS: dict[str, tuple[str, ...]] = {
     "/tf": ("qx", "qy", "qz", "qw", "px", "py", "pz"),
     "/ftcomp/wrench_error": ("ex", "ey", "ez", "etx", "ety", "etz"),
     "/ftcomp/twist_command": ("vx", "vy", "vz", "wx", "wy", "wz"),
-    "/ftcomp/temperature": ("temperature_C",),
-    "/ftcomp/imu": (
-        "accel_x_m_s2",
-        "accel_y_m_s2",
-        "accel_z_m_s2",
-        "gyro_x_rad_s",
-        "gyro_y_rad_s",
-        "gyro_z_rad_s",
-    ),
+    "/ftcomp/temperature": (TEMPERATURE_CHANNEL,),
+    "/ftcomp/imu": IMU_CHANNELS,
 }
 LOAD_TOPIC = "/ftcomp/load"
 
