@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from ftcomp.errors import HardwareError, ParameterError
+from ftcomp.hardware.protocols import ReportsRate
 from ftcomp.hardware.registry import open_sensor
 from ftcomp.hardware.robotiq import (
     FRAME_HEADER,
@@ -170,6 +171,10 @@ def test_both_streams_are_read_within_the_protocols_resolution(kind: str, host: 
     with serving(kind, host) as (uri, _), open_sensor(uri) as sensor:
         readings = wait_readings(sensor, 50)
         newest = sensor.read()
+        # The rate its readings came at, which sets run's wrench filter (the stand-in paces
+        # 100 Hz on an absolute schedule; a loaded host delays a few, it sends no more)
+        assert isinstance(sensor, ReportsRate)
+        assert sensor.rate_hz == pytest.approx(100.0, rel=0.3)
     assert len(readings) >= 50
     got = np.array([r.wrench_sensor for r in readings])
     expected = sent(len(got))

@@ -17,9 +17,17 @@ from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import ParameterError
 from ftcomp.frames import R_base_sensor_from
 from ftcomp.hardware.faults import FaultySensor
+from ftcomp.hardware.protocols import NothingToClose, WrenchSample, WrenchSensor
 from ftcomp.model import GravityModel
 from ftcomp.session.compliant import SettleRule
-from ftcomp.session.run import RUN_COLUMNS, AdmittanceConfig, RunConfig, RunResult, run_compliant
+from ftcomp.session.run import (
+    RUN_COLUMNS,
+    AdmittanceConfig,
+    RunConfig,
+    RunResult,
+    filter_hz_for,
+    run_compliant,
+)
 
 #: The 500 g load hangs 2 mm above the sponge.
 PLACE = "sim://?seed=4&surface=sponge&load_kg=0.5&grasp=1&clearance_mm=2"
@@ -112,6 +120,35 @@ def test_a_run_settles_on_the_sponge_and_reports_its_figures(
     assert abs(result.final_error[2]) <= 0.05
     assert 2e-3 < -result.travel_m[2] < 10e-3
     assert abs(result.travel_m[0]) < 1e-3 and abs(result.travel_m[1]) < 1e-3
+
+
+class _SlowSensor(NothingToClose):
+    """The cell's sensor, saying it samples at 100 Hz (an FT 300's rate)."""
+
+    rate_hz = 100.0
+
+    def __init__(self, sensor: WrenchSensor) -> None:
+        self.sensor = sensor
+
+    def read(self) -> WrenchSample:
+        return self.sensor.read()
+
+    def read_new(self) -> list[WrenchSample]:
+        return self.sensor.read_new()
+
+
+def test_the_wrench_filter_is_a_twentieth_of_a_slower_sensors_rate(
+    tool: GravityModel, tmp_path: Path
+) -> None:
+    assert filter_hz_for(None) == 20.0 and filter_hz_for(1000.0) == 20.0
+    assert filter_hz_for(100.0) == 5.0  # time constant 32 ms: three of its samples
+    config = RunConfig(AdmittanceConfig(_limits()), duration_s=0.1)
+    with ftcomp.open_robot(PLACE) as robot, ftcomp.open_sensor("sim://", robot) as sensor:
+        assert run_compliant(robot, sensor, tool, config, tmp_path / "a.csv").filter_hz == 20.0
+        slow = _SlowSensor(sensor)
+        assert run_compliant(robot, slow, tool, config, tmp_path / "b.csv").filter_hz == 5.0
+        given = RunConfig(AdmittanceConfig(_limits(), filter_hz=12.0), duration_s=0.1)
+        assert run_compliant(robot, slow, tool, given, tmp_path / "c.csv").filter_hz == 12.0
 
 
 @pytest.mark.parametrize(

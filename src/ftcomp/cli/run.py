@@ -40,7 +40,13 @@ from ftcomp.cli.options import add_field_option, map_field
 from ftcomp.control.safety import UniformLimits
 from ftcomp.session.compliant import SettleRule
 from ftcomp.session.interrupts import InterruptHold
-from ftcomp.session.run import AdmittanceConfig, RunConfig, RunResult
+from ftcomp.session.run import (
+    FILTER_HZ,
+    FILTER_SHARE_OF_RATE,
+    AdmittanceConfig,
+    RunConfig,
+    RunResult,
+)
 
 if TYPE_CHECKING:
     from ftcomp.calibration_record import Calibration
@@ -108,7 +114,12 @@ def register(parser: argparse.ArgumentParser) -> None:
         type=lambda s: [float(v) for v in s.split(",")],
         metavar="FX,FY,FZ,TX,TY,TZ",
     )
-    add_field_option(parser, AdmittanceConfig, "filter_hz")
+    add_field_option(
+        parser,
+        AdmittanceConfig,
+        "filter_hz",
+        none_means=f"{FILTER_HZ:g}, or a slower sensor's rate / {1 / FILTER_SHARE_OF_RATE:g}",
+    )
     for field, flag, scale, unit in (
         ("max_speed_m_s", "--max-speed-mm-s", mm, "mm/s"),
         ("max_accel_m_s2", "--max-accel-mm-s2", mm, "mm/s^2"),
@@ -210,7 +221,10 @@ def run(args: argparse.Namespace) -> int:
                 file=sys.stderr,
             )
             return 130
-    summary = f"{result.cycles} cycles in {result.duration_s:.2f} s, log {output}"
+    summary = (
+        f"{result.cycles} cycles in {result.duration_s:.2f} s, wrench filter "
+        f"{result.filter_hz:.3g} Hz, log {output}"
+    )
     if args.log is not None:
         summary += f", MCAP {args.log}"
     if result.cycles:

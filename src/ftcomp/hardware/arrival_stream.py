@@ -12,6 +12,7 @@ than ``timeout_s``. A reading is never made from a frame that failed its check.
 from __future__ import annotations
 
 import collections
+import math
 import threading
 import time
 from types import TracebackType
@@ -23,10 +24,12 @@ from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.protocols import WrenchSample
 from ftcomp.hardware.registry import Uri
 
-__all__ = ["ArrivalStream", "import_serial"]
+__all__ = ["RATE_MIN_READINGS", "ArrivalStream", "import_serial"]
 
 #: Readings kept for :meth:`ArrivalStream.read_new` between two calls.
 _BACKLOG: Final = 20_000
+#: Readings :attr:`ArrivalStream.rate_hz` needs before it tells a rate.
+RATE_MIN_READINGS: Final = 10
 
 
 def import_serial(what: str, extra: str) -> Any:
@@ -66,6 +69,7 @@ class ArrivalStream:
         self.running = False
         #: Readings received since the stream started.
         self.received = 0
+        self._first_ns: int | None = None
 
     # ------------------------------------------------------------ for subclasses
     def _open(self) -> None:
@@ -86,7 +90,20 @@ class ArrivalStream:
             self._backlog.append(sample)
             self._newest = sample
             self.received += 1
+            if self._first_ns is None:
+                self._first_ns = stamp_ns
         self._arrived.set()
+
+    @property
+    def rate_hz(self) -> float:
+        """The readings' mean rate since the stream started [Hz]; NaN before
+        :data:`RATE_MIN_READINGS` have come (:class:`~ftcomp.hardware.protocols.ReportsRate`)."""
+        with self._lock:
+            first, newest, received = self._first_ns, self._newest, self.received
+        if first is None or newest is None or received < RATE_MIN_READINGS:
+            return math.nan
+        span_ns = newest.t_ns - first
+        return (received - 1) * 1e9 / span_ns if span_ns > 0 else math.nan
 
     # ------------------------------------------------------------ lifecycle
     def __enter__(self) -> Self:

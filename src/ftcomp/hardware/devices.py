@@ -148,8 +148,7 @@ def _pending(face: TwinFace) -> TwinFace | None:
     before the force does), and both serial faces (``ft300-rtu``, ``bota-gen0``) sometimes stop
     ``run`` on ``stale_sample`` with the pty's buffer full (the client's reader thread not
     reading). Registering it is replacing ``_pending(face)`` by ``face``."""
-    del face
-    return None
+    return face
 
 
 _NOT_ON_A_TWIN: Final = "no twin face: a file, a fixed pose or the simulated cell itself"

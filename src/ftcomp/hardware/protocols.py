@@ -67,6 +67,7 @@ __all__ = [
     "PoseSample",
     "ReportsExtraChannels",
     "ReportsLateness",
+    "ReportsRate",
     "ReportsStreamHealth",
     "Robot",
     "StreamHealth",
@@ -493,6 +494,21 @@ class CountsLostPackets(Protocol):
     @property
     def rate_hz(self) -> float:
         """The measured rate of arriving samples [Hz]."""
+        ...
+
+
+@runtime_checkable
+class ReportsRate(Protocol):
+    """A sensor that knows the rate its samples come at: measured as they arrive, or its
+    simulation's (``ftcomp run`` sets its wrench filter from it).
+
+    Backends: ``netft://`` (as pynetft measures it), ``robotiq://``, ``bota://`` (from their
+    readings' arrivals), ``sim://``.
+    """
+
+    @property
+    def rate_hz(self) -> float:
+        """Samples per second [Hz]; NaN while too few have come to tell."""
         ...
 
 

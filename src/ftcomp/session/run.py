@@ -17,6 +17,7 @@ replays through the step to the same commands.
 from __future__ import annotations
 
 import math
+import time
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -47,7 +48,14 @@ from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import quat_from_matrix
 from ftcomp.hardware.pacing import TimingSummary
-from ftcomp.hardware.protocols import Mount, ReportsExtraChannels, Robot, TakesControl, WrenchSensor
+from ftcomp.hardware.protocols import (
+    Mount,
+    ReportsExtraChannels,
+    ReportsRate,
+    Robot,
+    TakesControl,
+    WrenchSensor,
+)
 from ftcomp.model import GravityModel
 from ftcomp.samples import WRENCH_COLUMNS
 from ftcomp.session.compliant import DEFAULT_HOLD_S, CompliantStep, CycleRecord, SettleRule
@@ -57,6 +65,8 @@ from ftcomp.session.online_load import require_tool_weight
 from ftcomp.session.outcome import Outcome
 
 __all__ = [
+    "FILTER_HZ",
+    "FILTER_SHARE_OF_RATE",
     "LAWS",
     "RUN_COLUMNS",
     "AdmittanceConfig",
@@ -64,7 +74,9 @@ __all__ = [
     "RunConfig",
     "RunResult",
     "cycle_row",
+    "filter_hz_for",
     "run_compliant",
+    "sensor_rate_hz",
 ]
 
 LawName = Literal["combined", "position", "velocity", "mass-damper-spring"]
@@ -123,6 +135,43 @@ def cycle_row(record: CycleRecord, t0_ns: int) -> list[float]:
     ]
 
 
+#: The contact wrench's low-pass by default [Hz] ...
+FILTER_HZ = 20.0
+#: ... and at most this share of the sensor's sample rate: the filter's time constant then
+#: spans three of the sensor's samples (1 / (2 pi rate / 20) = 3.2 sample periods). A sensor
+#: slower than the loop (an FT 300's 100 Hz under a UR's 500 Hz) holds each reading for
+#: several cycles; at 20 Hz the filter passes those steps, K1's derivative turns each into a
+#: jolt of the arm, and a sponge under the load feels the sensor's noise: the twin's FT 300
+#: faces ended placements 0.05-0.08 N short of the weight, at 5 Hz within 0.03 N.
+FILTER_SHARE_OF_RATE = 1.0 / 20.0
+#: How long ``run`` waits for a sensor to have measured its rate [s].
+RATE_WAIT_S = 1.0
+
+
+def filter_hz_for(sensor_rate_hz: float | None) -> float:
+    """The contact wrench's low-pass for a sensor sampling at ``sensor_rate_hz`` [Hz] (None:
+    not known): :data:`FILTER_HZ`, or :data:`FILTER_SHARE_OF_RATE` of a slower sensor's rate."""
+    if sensor_rate_hz is None:
+        return FILTER_HZ
+    return min(FILTER_HZ, FILTER_SHARE_OF_RATE * sensor_rate_hz)
+
+
+def sensor_rate_hz(sensor: WrenchSensor, wait_s: float = RATE_WAIT_S) -> float | None:
+    """The rate a sensor's samples come at [Hz], if it reports one
+    (:class:`~ftcomp.hardware.protocols.ReportsRate`): waits up to ``wait_s`` for a streaming
+    sensor to have measured it; None when it does not report one or has not measured it."""
+    if not isinstance(sensor, ReportsRate):
+        return None
+    deadline = time.monotonic() + wait_s
+    while True:
+        rate = sensor.rate_hz
+        if math.isfinite(rate) and rate > 0.0:
+            return rate
+        if time.monotonic() >= deadline:
+            return None
+        time.sleep(0.01)
+
+
 @dataclass(frozen=True)
 class AdmittanceConfig:
     """The admittance controller of a run, in SI units (see :mod:`ftcomp.control.laws`).
@@ -142,7 +191,8 @@ class AdmittanceConfig:
         damping: its D [N*s/m; N*m*s/rad], >= 0.
         stiffness: its K [N/m; N*m/rad], >= 0 (0: free).
         wrench_desired: F0 [N, N*m] in the control frame.
-        filter_hz: the low-pass on the contact wrench [Hz], > 0.
+        filter_hz: the low-pass on the contact wrench [Hz], > 0; None: :func:`filter_hz_for`
+            the sensor's sample rate.
     """
 
     limits: SafetyLimits
@@ -173,7 +223,9 @@ class AdmittanceConfig:
     wrench_desired: tuple[float, ...] = param(
         (0.0,) * 6, length=6, unit="N, N*m", help="desired contact wrench in the control frame"
     )
-    filter_hz: float = param(20.0, gt=0.0, unit="Hz", help="low-pass on the contact wrench")
+    filter_hz: float | None = param(
+        None, gt=0.0, optional=True, unit="Hz", help="low-pass on the contact wrench"
+    )
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -195,11 +247,15 @@ class AdmittanceConfig:
             np.array(self.mass), np.array(self.damping), np.array(self.stiffness), S
         )
 
-    def controller(self, period_s: float) -> AdmittanceController:
-        """The controller for a loop of period ``period_s`` [s] (the filter's sample time)."""
+    def controller(
+        self, period_s: float, sensor_rate_hz: float | None = None
+    ) -> AdmittanceController:
+        """The controller for a loop of period ``period_s`` [s] (the filter's sample time) on a
+        sensor sampling at ``sensor_rate_hz`` [Hz] (None: not known)."""
+        cutoff_hz = self.filter_hz if self.filter_hz is not None else filter_hz_for(sensor_rate_hz)
         return AdmittanceController(
             law=self.law_for(),
-            wrench_filter=LowPassFilter(self.filter_hz, period_s),
+            wrench_filter=LowPassFilter(cutoff_hz, period_s),
             limits=self.limits,
             frame=self.frame,
             wrench_desired=np.array(self.wrench_desired),
@@ -277,6 +333,7 @@ class RunResult:
         bias_correction: the tracked bias minus the calibration's at the end [N, N*m], (6,)
             (None: not tracking).
         bias_updates: cycles that moved the tracked bias.
+        filter_hz: the contact wrench's low-pass the controller ran with [Hz].
     """
 
     outcome: Outcome
@@ -292,6 +349,7 @@ class RunResult:
     observer_dropped_rows: int = 0
     bias_correction: NDArray[np.float64] | None = field(default=None, repr=False)
     bias_updates: int = 0
+    filter_hz: float = FILTER_HZ
 
     @property
     def faulted(self) -> bool:
@@ -387,7 +445,8 @@ def run_compliant(
     if isinstance(robot, TakesControl) and not config.dry_run:
         robot.connect_control()  # before the loop: it takes a while (a UR uploads its script)
     period_s = robot.control_period_s
-    controller = config.admittance.controller(period_s)
+    controller = config.admittance.controller(period_s, sensor_rate_hz(sensor))
+    wrench_filter = controller.wrench_filter
     tracker = BiasTracker(config.track_bias) if config.track_bias is not None else None
     pipeline = (
         WrenchPipeline.weighing(calibration, 1.0 / period_s)  # one call per cycle
@@ -476,4 +535,5 @@ def run_compliant(
         observer_dropped_rows=dropped,
         bias_correction=tracker.correction.copy() if tracker is not None else None,
         bias_updates=tracker.updates if tracker is not None else 0,
+        filter_hz=wrench_filter.cutoff_hz if wrench_filter is not None else math.nan,
     )

@@ -341,6 +341,11 @@ class SimWrenchSensor(NothingToClose):
         )
 
     @property
+    def rate_hz(self) -> float:
+        """Its output rate [Hz] (:class:`~ftcomp.hardware.protocols.ReportsRate`)."""
+        return self._spec.output_rate_Hz
+
+    @property
     def spec(self) -> SensorSpec:
         """The sensor's specification."""
         return self._spec
