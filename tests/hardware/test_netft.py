@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from ftcomp.errors import HardwareError, ParameterError
-from ftcomp.hardware.protocols import WrenchSensor
+from ftcomp.hardware.protocols import ReportsRate, WrenchSensor
 from ftcomp.hardware.registry import open_robot, open_sensor
+from ftcomp.session.run import sensor_rate_hz
 
 pytest.importorskip("pynetft")
 
@@ -106,3 +107,19 @@ def test_bad_options_are_errors_before_connecting(uri: str, message: str) -> Non
 def test_a_net_ft_cannot_share_the_simulated_robots_clock() -> None:
     with open_robot("sim://") as robot, pytest.raises(ParameterError, match="monotonic clock"):
         open_sensor("netft://127.0.0.9", robot)
+
+
+def test_the_sample_rate_is_the_stand_ins_to_a_few_percent(request: pytest.FixtureRequest) -> None:
+    """What ``run`` sets its wrench filter from (pynetft's own rate estimate starts low:
+    67 Hz of a 1 kHz stream a second in, measured on the twin)."""
+    s = _scenario(rate_hz=250.0)
+    host = loopback_address(request.node.name)
+    with (
+        running("fake_netft", host, "49152", "8080", s.to_json()),
+        open_sensor(f"netft://{host}?http_port=8080") as sensor,
+    ):
+        assert isinstance(sensor, ReportsRate)
+        rate = sensor_rate_hz(sensor)
+    # the stand-in paces 250 Hz on an absolute schedule: a late packet is followed by the next
+    # on time, so the mean over the readings is its rate within its own lateness
+    assert rate == pytest.approx(250.0, rel=0.1)

@@ -174,7 +174,7 @@ def test_both_streams_are_read_within_the_protocols_resolution(kind: str, host: 
         # The rate its readings came at, which sets run's wrench filter (the stand-in paces
         # 100 Hz on an absolute schedule; a loaded host delays a few, it sends no more)
         assert isinstance(sensor, ReportsRate)
-        assert sensor.rate_hz == pytest.approx(100.0, rel=0.3)
+        assert sensor.sample_rate_hz == pytest.approx(100.0, rel=0.3)
     assert len(readings) >= 50
     got = np.array([r.wrench_sensor for r in readings])
     expected = sent(len(got))

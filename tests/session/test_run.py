@@ -125,7 +125,7 @@ def test_a_run_settles_on_the_sponge_and_reports_its_figures(
 class _SlowSensor(NothingToClose):
     """The cell's sensor, saying it samples at 100 Hz (an FT 300's rate)."""
 
-    rate_hz = 100.0
+    sample_rate_hz = 100.0
 
     def __init__(self, sensor: WrenchSensor) -> None:
         self.sensor = sensor

@@ -24,12 +24,21 @@ from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.protocols import WrenchSample
 from ftcomp.hardware.registry import Uri
 
-__all__ = ["RATE_MIN_READINGS", "ArrivalStream", "import_serial"]
+__all__ = ["RATE_MIN_READINGS", "ArrivalStream", "import_serial", "mean_rate_hz"]
 
 #: Readings kept for :meth:`ArrivalStream.read_new` between two calls.
 _BACKLOG: Final = 20_000
-#: Readings :attr:`ArrivalStream.rate_hz` needs before it tells a rate.
+#: Readings a mean rate needs (:func:`mean_rate_hz`).
 RATE_MIN_READINGS: Final = 10
+
+
+def mean_rate_hz(count: int, first_ns: int, last_ns: int) -> float:
+    """The mean rate of ``count`` samples stamped from ``first_ns`` to ``last_ns`` [Hz]; NaN
+    with fewer than :data:`RATE_MIN_READINGS` or no time between them."""
+    span_ns = last_ns - first_ns
+    if count < RATE_MIN_READINGS or span_ns <= 0:
+        return math.nan
+    return (count - 1) * 1e9 / span_ns
 
 
 def import_serial(what: str, extra: str) -> Any:
@@ -95,15 +104,14 @@ class ArrivalStream:
         self._arrived.set()
 
     @property
-    def rate_hz(self) -> float:
+    def sample_rate_hz(self) -> float:
         """The readings' mean rate since the stream started [Hz]; NaN before
         :data:`RATE_MIN_READINGS` have come (:class:`~ftcomp.hardware.protocols.ReportsRate`)."""
         with self._lock:
             first, newest, received = self._first_ns, self._newest, self.received
-        if first is None or newest is None or received < RATE_MIN_READINGS:
+        if first is None or newest is None:
             return math.nan
-        span_ns = newest.t_ns - first
-        return (received - 1) * 1e9 / span_ns if span_ns > 0 else math.nan
+        return mean_rate_hz(received, first, newest.t_ns)
 
     # ------------------------------------------------------------ lifecycle
     def __enter__(self) -> Self:

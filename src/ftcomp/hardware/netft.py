@@ -35,6 +35,7 @@ gravity-aware at any still pose with ``ftcomp rebias``.
 from __future__ import annotations
 
 import collections
+import math
 import time
 from types import TracebackType
 from typing import TYPE_CHECKING, Any
@@ -42,6 +43,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ftcomp.errors import HardwareError, ParameterError
+from ftcomp.hardware.arrival_stream import mean_rate_hz
 from ftcomp.hardware.pacing import on_host_clock
 from ftcomp.hardware.protocols import Robot, StreamHealth, WrenchSample, WrenchSensor
 from ftcomp.hardware.registry import Uri
@@ -142,6 +144,8 @@ class NetFTSensor:
         # loop's read() converts only the newest; read_new() every one).
         self._backlog: collections.deque[_Record] = collections.deque(maxlen=_BACKLOG)
         self._newest: _Record | None = None
+        self._drained = 0
+        self._first_ns: int | None = None
         self._last: WrenchSample | None = None
         self._scale: tuple[float, float] | None = None
         self._units = ("", "")
@@ -233,6 +237,9 @@ class NetFTSensor:
                 record = (sample.received_at_ns, *sample.force, *sample.torque)
                 self._backlog.append(record)
                 self._newest = record
+                if self._first_ns is None:
+                    self._first_ns = sample.received_at_ns
+                self._drained += 1
         except TimeoutError:
             return  # nothing more for now
         except pn.SensorFaultError as exc:
@@ -308,6 +315,15 @@ class NetFTSensor:
     def lost_packets(self) -> int:
         """RDT packets lost since the stream started (gaps in the RDT sequence)."""
         return int(self._client.health().lost_count)
+
+    @property
+    def sample_rate_hz(self) -> float:
+        """The mean rate of the records taken from the client since the first [Hz] (those
+        :meth:`read_new` handed out or keeps; :meth:`read` takes none); NaN before ten
+        (:class:`~ftcomp.hardware.protocols.ReportsRate`)."""
+        if self._first_ns is None or self._newest is None:
+            return math.nan
+        return mean_rate_hz(self._drained, self._first_ns, self._newest[0])
 
     @property
     def rate_hz(self) -> float:

@@ -499,15 +499,16 @@ class CountsLostPackets(Protocol):
 
 @runtime_checkable
 class ReportsRate(Protocol):
-    """A sensor that knows the rate its samples come at: measured as they arrive, or its
-    simulation's (``ftcomp run`` sets its wrench filter from it).
+    """A sensor that tells the rate its samples come at: the mean rate of the samples it has
+    handed out or kept since its stream started, or its simulation's (``ftcomp run`` sets its
+    wrench filter from it).
 
-    Backends: ``netft://`` (as pynetft measures it), ``robotiq://``, ``bota://`` (from their
-    readings' arrivals), ``sim://``.
+    Backends: ``netft://``, ``robotiq://``, ``bota://`` (from their readings' stamps),
+    ``sim://``.
     """
 
     @property
-    def rate_hz(self) -> float:
+    def sample_rate_hz(self) -> float:
         """Samples per second [Hz]; NaN while too few have come to tell."""
         ...
 

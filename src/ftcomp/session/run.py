@@ -157,14 +157,20 @@ def filter_hz_for(sensor_rate_hz: float | None) -> float:
 
 
 def sensor_rate_hz(sensor: WrenchSensor, wait_s: float = RATE_WAIT_S) -> float | None:
-    """The rate a sensor's samples come at [Hz], if it reports one
-    (:class:`~ftcomp.hardware.protocols.ReportsRate`): waits up to ``wait_s`` for a streaming
-    sensor to have measured it; None when it does not report one or has not measured it."""
+    """The rate a sensor's samples come at [Hz], if it tells one
+    (:class:`~ftcomp.hardware.protocols.ReportsRate`): takes its readings (``read_new``) for up
+    to ``wait_s`` until it has seen enough to tell; None when it does not tell one or has not
+    seen enough. Call it before a loop: the readings it takes are gone.
+
+    Raises:
+        HardwareError: the sensor faulted meanwhile.
+    """
     if not isinstance(sensor, ReportsRate):
         return None
     deadline = time.monotonic() + wait_s
     while True:
-        rate = sensor.rate_hz
+        sensor.read_new()
+        rate = sensor.sample_rate_hz
         if math.isfinite(rate) and rate > 0.0:
             return rate
         if time.monotonic() >= deadline:

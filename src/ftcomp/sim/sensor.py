@@ -341,7 +341,7 @@ class SimWrenchSensor(NothingToClose):
         )
 
     @property
-    def rate_hz(self) -> float:
+    def sample_rate_hz(self) -> float:
         """Its output rate [Hz] (:class:`~ftcomp.hardware.protocols.ReportsRate`)."""
         return self._spec.output_rate_Hz
 
