@@ -115,14 +115,12 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         self._weld = m.equality(NAMES["grasp_weld"]).id if self._config.load is not None else -1
         self._load_qadr = int(m.jnt_qposadr[m.body_jntadr[self._load]]) if self._load >= 0 else -1
         self._load_dadr = int(m.jnt_dofadr[m.body_jntadr[self._load]]) if self._load >= 0 else -1
-        self._surface_geoms = np.array(
-            [
-                gid
-                for name in SURFACE_GEOMS
-                if (gid := mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)) >= 0
-            ],
-            dtype=int,
+        self._surface_set = frozenset(
+            gid
+            for name in SURFACE_GEOMS
+            if (gid := mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, name)) >= 0
         )
+        self._contact_buffer = np.zeros(6)
         sponge = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, NAMES["sponge_joint"])
         self._sponge_qadr = int(m.jnt_qposadr[sponge]) if sponge >= 0 else -1
         self._R_world_base = self._config.R_world_base
