@@ -27,6 +27,7 @@ from ftcomp.session.run import (
     RunResult,
     filter_hz_for,
     run_compliant,
+    stale_after_s_for,
 )
 
 #: The 500 g load hangs 2 mm above the sponge.
@@ -149,6 +150,19 @@ def test_the_wrench_filter_is_a_twentieth_of_a_slower_sensors_rate(
         assert run_compliant(robot, slow, tool, config, tmp_path / "b.csv").filter_hz == 5.0
         given = RunConfig(AdmittanceConfig(_limits(), filter_hz=12.0), duration_s=0.1)
         assert run_compliant(robot, slow, tool, given, tmp_path / "c.csv").filter_hz == 12.0
+
+
+def test_a_reading_is_stale_only_when_older_than_four_of_its_sensors_periods(
+    tool: GravityModel, tmp_path: Path
+) -> None:
+    assert stale_after_s_for(0.02, None) == 0.02 and stale_after_s_for(0.02, 1000.0) == 0.02
+    assert stale_after_s_for(0.02, 100.0) == pytest.approx(0.04)
+    assert stale_after_s_for(0.075, 100.0) == 0.075
+    config = RunConfig(AdmittanceConfig(_limits()), duration_s=0.1)  # limits: 20 ms
+    with ftcomp.open_robot(PLACE) as robot, ftcomp.open_sensor("sim://", robot) as sensor:
+        fast = run_compliant(robot, sensor, tool, config, tmp_path / "a.csv")
+        slow = run_compliant(robot, _SlowSensor(sensor), tool, config, tmp_path / "b.csv")
+    assert fast.stale_after_s == 0.02 and slow.stale_after_s == pytest.approx(0.04)
 
 
 @pytest.mark.parametrize(

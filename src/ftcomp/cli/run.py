@@ -223,7 +223,8 @@ def run(args: argparse.Namespace) -> int:
             return 130
     summary = (
         f"{result.cycles} cycles in {result.duration_s:.2f} s, wrench filter "
-        f"{result.filter_hz:.3g} Hz, log {output}"
+        f"{result.filter_hz:.3g} Hz, stale after {result.stale_after_s * 1e3:.3g} ms, "
+        f"log {output}"
     )
     if args.log is not None:
         summary += f", MCAP {args.log}"

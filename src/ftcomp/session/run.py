@@ -16,6 +16,7 @@ replays through the step to the same commands.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections import deque
@@ -69,6 +70,7 @@ __all__ = [
     "FILTER_SHARE_OF_RATE",
     "LAWS",
     "RUN_COLUMNS",
+    "STALE_SENSOR_PERIODS",
     "AdmittanceConfig",
     "LawName",
     "RunConfig",
@@ -77,6 +79,7 @@ __all__ = [
     "filter_hz_for",
     "run_compliant",
     "sensor_rate_hz",
+    "stale_after_s_for",
 ]
 
 LawName = Literal["combined", "position", "velocity", "mass-damper-spring"]
@@ -146,6 +149,11 @@ FILTER_HZ = 20.0
 FILTER_SHARE_OF_RATE = 1.0 / 20.0
 #: How long ``run`` waits for a sensor to have measured its rate [s].
 RATE_WAIT_S = 1.0
+#: A reading stops the run as stale only when it is also older than this many of its sensor's
+#: sample periods: a 100 Hz sensor's newest reading is up to 10 ms old before any transport,
+#: and a USB serial adapter's latency timer (16 ms on FTDI's) adds to that; the twin's 100 Hz
+#: FT 300 read 18.6 ms old at the 99th percentile on an idle host, against the default 20 ms.
+STALE_SENSOR_PERIODS = 4
 
 
 def filter_hz_for(sensor_rate_hz: float | None) -> float:
@@ -154,6 +162,14 @@ def filter_hz_for(sensor_rate_hz: float | None) -> float:
     if sensor_rate_hz is None:
         return FILTER_HZ
     return min(FILTER_HZ, FILTER_SHARE_OF_RATE * sensor_rate_hz)
+
+
+def stale_after_s_for(limit_s: float, sensor_rate_hz: float | None) -> float:
+    """The age at which a reading of a sensor sampling at ``sensor_rate_hz`` [Hz] (None: not
+    known) is stale: ``limit_s`` [s], or :data:`STALE_SENSOR_PERIODS` of its periods if longer."""
+    if sensor_rate_hz is None:
+        return limit_s
+    return max(limit_s, STALE_SENSOR_PERIODS / sensor_rate_hz)
 
 
 def sensor_rate_hz(sensor: WrenchSensor, wait_s: float = RATE_WAIT_S) -> float | None:
@@ -257,12 +273,15 @@ class AdmittanceConfig:
         self, period_s: float, sensor_rate_hz: float | None = None
     ) -> AdmittanceController:
         """The controller for a loop of period ``period_s`` [s] (the filter's sample time) on a
-        sensor sampling at ``sensor_rate_hz`` [Hz] (None: not known)."""
+        sensor sampling at ``sensor_rate_hz`` [Hz] (None: not known): its wrench filter
+        :attr:`filter_hz` or :func:`filter_hz_for` the rate, its stale limit
+        :func:`stale_after_s_for` the rate."""
         cutoff_hz = self.filter_hz if self.filter_hz is not None else filter_hz_for(sensor_rate_hz)
+        stale_s = stale_after_s_for(self.limits.stale_after_s, sensor_rate_hz)
         return AdmittanceController(
             law=self.law_for(),
             wrench_filter=LowPassFilter(cutoff_hz, period_s),
-            limits=self.limits,
+            limits=dataclasses.replace(self.limits, stale_after_s=stale_s),
             frame=self.frame,
             wrench_desired=np.array(self.wrench_desired),
         )
@@ -340,6 +359,7 @@ class RunResult:
             (None: not tracking).
         bias_updates: cycles that moved the tracked bias.
         filter_hz: the contact wrench's low-pass the controller ran with [Hz].
+        stale_after_s: the age at which a reading stopped the run [s] (:func:`stale_after_s_for`).
     """
 
     outcome: Outcome
@@ -356,6 +376,7 @@ class RunResult:
     bias_correction: NDArray[np.float64] | None = field(default=None, repr=False)
     bias_updates: int = 0
     filter_hz: float = FILTER_HZ
+    stale_after_s: float = math.nan
 
     @property
     def faulted(self) -> bool:
@@ -542,4 +563,5 @@ def run_compliant(
         bias_correction=tracker.correction.copy() if tracker is not None else None,
         bias_updates=tracker.updates if tracker is not None else 0,
         filter_hz=wrench_filter.cutoff_hz if wrench_filter is not None else math.nan,
+        stale_after_s=controller.limits.stale_after_s,
     )
