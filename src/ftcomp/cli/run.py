@@ -43,6 +43,7 @@ from ftcomp.session.interrupts import InterruptHold
 from ftcomp.session.run import (
     FILTER_HZ,
     FILTER_SHARE_OF_RATE,
+    STALE_SENSOR_PERIODS,
     AdmittanceConfig,
     RunConfig,
     RunResult,
@@ -52,6 +53,13 @@ if TYPE_CHECKING:
     from ftcomp.calibration_record import Calibration
 
 __all__ = ["register", "run"]
+
+
+#: Help that says more than the field's own (what run adds to the rule).
+_HELP = {
+    "stale_after_s": f"a reading older than this, and than {STALE_SENSOR_PERIODS} of a slower "
+    "sensor's periods, stops",
+}
 
 
 def register(parser: argparse.ArgumentParser) -> None:
@@ -129,7 +137,9 @@ def register(parser: argparse.ArgumentParser) -> None:
         ("max_torque_Nm", "--max-torque-Nm", 1.0, "N*m"),
         ("stale_after_s", "--stale-ms", mm, "ms"),
     ):
-        add_field_option(parser, UniformLimits, field, flag, scale=scale, unit=unit)
+        add_field_option(
+            parser, UniformLimits, field, flag, scale=scale, unit=unit, help=_HELP.get(field)
+        )
     add_field_option(
         parser,
         UniformLimits,
