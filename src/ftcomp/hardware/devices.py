@@ -158,6 +158,15 @@ def _pending(face: TwinFace) -> TwinFace | None:
 
 _NOT_ON_A_TWIN: Final = "no twin face: a file, a fixed pose or the simulated cell itself"
 
+#: The cell's network going silent: declared by the robot face and by each sensor face on the
+#: cell's network (a fault both faces of a pair declare fires on both).
+_NETWORK_LOSS: Final = Fault(
+    "network-loss",
+    "the cell's network goes silent: no data from robot or sensor (a cable pulled between the "
+    "host and the cell's switch; connections stay open)",
+    "stale_sample",
+    0.1,
+)
 _FT300_FROZEN: Final = Fault(
     "ft300-frozen", "the FT 300 repeats its last reading", "frozen_sample", 1.0
 )
@@ -198,13 +207,7 @@ BUILT_IN: Final[tuple[Device, ...]] = (
                     "no new data from the controller for 0.50 s",
                     1.0,
                 ),
-                Fault(
-                    "network-loss",
-                    "the cell's network goes silent: no data from robot or sensor (a cable "
-                    "pulled between the host and the cell's switch; connections stay open)",
-                    "stale_sample",
-                    0.1,
-                ),
+                _NETWORK_LOSS,
                 Fault(
                     "protective-stop",
                     "a protective stop: the arm stops, the program ends",
@@ -305,13 +308,7 @@ BUILT_IN: Final[tuple[Device, ...]] = (
                     "stale_sample",
                     0.1,
                 ),
-                Fault(
-                    "network-loss",
-                    "the cell's network goes silent: no data from robot or sensor (a cable "
-                    "pulled between the host and the cell's switch; connections stay open)",
-                    "stale_sample",
-                    0.1,
-                ),
+                _NETWORK_LOSS,
             ),
             max_rate_hz=7000.0,
             requires=("pynetft",),
@@ -354,13 +351,7 @@ BUILT_IN: Final[tuple[Device, ...]] = (
                         "sensor fault: the URCap stream ended",
                         0.1,
                     ),
-                    Fault(
-                        "network-loss",
-                        "the cell's network goes silent: no data from robot or sensor (a cable "
-                        "pulled between the host and the cell's switch; connections stay open)",
-                        "stale_sample",
-                        0.1,
-                    ),
+                    _NETWORK_LOSS,
                 ),
                 rate_hz=100.0,
                 max_rate_hz=100.0,

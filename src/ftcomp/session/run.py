@@ -375,7 +375,7 @@ class RunResult:
     observer_dropped_rows: int = 0
     bias_correction: NDArray[np.float64] | None = field(default=None, repr=False)
     bias_updates: int = 0
-    filter_hz: float = FILTER_HZ
+    filter_hz: float = math.nan
     stale_after_s: float = math.nan
 
     @property
