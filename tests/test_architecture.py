@@ -43,6 +43,7 @@ LAYERS: dict[str, int] = {
     "ftcomp.errors": 1,
     "ftcomp.extras": 1,
     "ftcomp.frames": 1,
+    "ftcomp.chain_ik": 1,
     "ftcomp.kinematics": 1,
     "ftcomp.lazy": 1,
     "ftcomp.model": 1,

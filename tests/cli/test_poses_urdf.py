@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from ftcomp.chain_ik import ChainIk
 from ftcomp.cli import main
 from ftcomp.io.poses_csv import read_pose_file
 from ftcomp.ros2.urdf import UrdfChain
-from ftcomp.ros2.urdf_ik import UrdfIk
 from ros2.simbag import urdf_of_cell
 
 
@@ -46,7 +46,7 @@ def test_a_urdf_design_lists_orientations_the_arm_reaches_at_the_stated_position
     # Every orientation, checked again by forward kinematics of an IK solution within the
     # limits: the file's quaternions have 12 decimals, so the pose is met to ~1e-9 (1e-6 with
     # margin, far below the IK's acceptance of 1 mm and 0.1 deg).
-    ik = UrdfIk(UrdfChain(arm, "base", "ft_sensor"))
+    ik = ChainIk(UrdfChain(arm, "base", "ft_sensor"))
     lower, upper = ik.chain.joint_limits.T
     for p, R in zip(poses.positions_base_m, poses.rotations.as_matrix(), strict=True):
         q = ik.solve(p, R)
@@ -138,7 +138,7 @@ def test_kept_poses_keep_their_positions_and_an_unreachable_one_is_warned(
     keep = tmp_path / "keep.csv"
     tilted = [-0.846908209064, -0.226928370682, 0.410623090210, 0.250277201890]
     keep.write_text(f"pose,qx,qy,qz,qw\nk1,1,0,0,0\nk2,{','.join(map(str, tilted))}\n")
-    ik = UrdfIk(UrdfChain(arm))
+    ik = ChainIk(UrdfChain(arm))
     high = np.array([0.595, 0.0, 0.74])
     assert ik.solve(high, np.diag([1.0, -1.0, -1.0])) is not None  # k1: straight down
     assert ik.solve(high, read_pose_file(keep).rotations.as_matrix()[1]) is None  # k2
@@ -200,6 +200,6 @@ def test_a_design_whose_best_poses_are_out_of_reach_samples_the_reachable_ones(
     assert match is not None, printed
     assert 20 <= int(match.group(1)) <= 80 and int(match.group(2)) >= 20
     poses = read_pose_file(out)
-    chain_ik = UrdfIk(UrdfChain(urdf))
+    chain_ik = ChainIk(UrdfChain(urdf))
     for R in poses.rotations.as_matrix():  # every designed pose is reachable
         assert chain_ik.solve(np.array([0.5, 0.0, 0.4]), R) is not None

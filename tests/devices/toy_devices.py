@@ -106,7 +106,10 @@ class ToyRobotFace:
         R_target = matrix_from_rotvec(rv_target)
         return np.concatenate([np.subtract(p_target, p), rotvec_from_matrix(R_target @ R.T)])
 
-    def cycle(self, contact_force_N: float) -> np.ndarray:
+    def cycle(self, contact_force_N: float) -> None:
+        self.cell.command_twist(self._twist())
+
+    def _twist(self) -> np.ndarray:
         kind, value, since = self.command
         if kind == "twist" and self.cell.time() - since <= TWIST_HOLD_S:
             return np.array(value, dtype=float)

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from ftcomp.chain_ik import ChainIk, mid_configuration
 from ftcomp.errors import InputFileError
 from ftcomp.ros2.urdf import UrdfChain
-from ftcomp.ros2.urdf_ik import UrdfIk, front_position, mid_configuration
+from ftcomp.ros2.urdf_ik import front_position
 
 sys.path.insert(0, str(Path(__file__).parent))
 from simbag import urdf_of_cell
@@ -125,7 +126,7 @@ def test_ik_recovers_the_pose_of_known_configurations(arm, rng) -> None:
     are far below the acceptance tolerances (1 mm, 0.1 deg) and would catch a solver that only
     met those."""
     chain = UrdfChain(arm)
-    ik = UrdfIk(chain)
+    ik = ChainIk(chain)
     lower, upper = chain.joint_limits.T
     margin = 0.1 * (upper - lower)  # away from the limits, where a pose has few solutions
     for q_true in rng.uniform(lower + margin, upper - margin, (12, 6)):
@@ -140,14 +141,14 @@ def test_ik_recovers_the_pose_of_known_configurations(arm, rng) -> None:
 def test_ik_rejects_a_pose_reachable_only_outside_the_joint_limits(arm, arm_text, tmp_path):
     """The tip turned 1 rad about the base axis: with j1 limited to +-0.5 rad no configuration
     reaches it (the arm can reach that side only by turning j1 to 1 rad or 1 - pi)."""
-    full = UrdfIk(UrdfChain(arm))
+    full = ChainIk(UrdfChain(arm))
     q_true = np.array([1.0, 0.3, 1.2, 0.2, 0.8, -0.4])
     p, R = full.pose(q_true)
     q = full.solve(p, R)
     assert q is not None
     narrow_path = tmp_path / "narrow.urdf"
     narrow_path.write_text(_limit_j1(arm_text, -0.5, 0.5))
-    narrow = UrdfIk(UrdfChain(narrow_path))
+    narrow = ChainIk(UrdfChain(narrow_path))
     np.testing.assert_array_equal(narrow.chain.joint_limits[0], [-0.5, 0.5])
     assert narrow.solve(p, R) is None
     assert narrow.solve(p) is None  # not even the position
@@ -165,7 +166,7 @@ def test_ik_agrees_with_the_simulated_cell_on_reachable_orientations(arm) -> Non
     from ftcomp.sim import SceneConfig, SimCell
 
     cell = SimCell(SceneConfig())
-    ik = UrdfIk(UrdfChain(arm))
+    ik = ChainIk(UrdfChain(arm))
     p = np.array([0.595, 0.0, 0.74])  # the tip at the zero configuration: 2 of 16 out of reach
     candidates = candidate_orientations(directions=8, spins=2)
     ours = [ik.solve(p, R) is not None for R in candidates]
@@ -209,7 +210,7 @@ def test_the_front_position_is_half_the_chain_ahead_at_shoulder_height(arm) -> N
     chain = UrdfChain(arm)
     length = math.hypot(0.1, 0.32) + 0.4 + 0.02 + 0.4 + 0.065 + 0.03
     np.testing.assert_allclose(front_position(chain), [length / 2, 0.0, 0.32], atol=1e-12)
-    ik = UrdfIk(chain)
+    ik = ChainIk(chain)
     down = Rotation.from_euler("x", 180, degrees=True).as_matrix()
     assert ik.solve(front_position(chain), down) is not None
     np.testing.assert_allclose(mid_configuration(chain)[[0, 3, 4, 5]], 0.0, atol=1e-12)

@@ -12,7 +12,7 @@ or has checked :data:`MAX_SAMPLE`). The sample gives the reachable fraction, whi
 
 The check itself is any ``(p_base_m, R_base_sensor) -> bool``: a robot's own
 (:class:`~ftcomp.hardware.protocols.ChecksReachability`) or a URDF chain's inverse kinematics
-(:class:`ftcomp.ros2.urdf_ik.UrdfIk`).
+(:class:`ftcomp.chain_ik.ChainIk`).
 
 Each orientation reachable is not yet a visit the arm can make: joint moves between them may
 wind a joint to its end. :func:`plan_visit` checks the whole visit as a robot that moves in

@@ -141,11 +141,12 @@ def _position_m(position_mm: list[float]) -> NDArray[np.float64]:
 
 def _urdf_reach(args: argparse.Namespace) -> tuple[Reachability, str]:
     """The reach check by the URDF chain's inverse kinematics, and its description."""
+    from ftcomp.chain_ik import ChainIk, mid_configuration
     from ftcomp.ros2.urdf import UrdfChain
-    from ftcomp.ros2.urdf_ik import UrdfIk, front_position, mid_configuration
+    from ftcomp.ros2.urdf_ik import front_position
 
     chain = UrdfChain(args.urdf, args.base_link, args.tip_link)
-    ik = UrdfIk(chain)
+    ik = ChainIk(chain)
     given = args.position_mm is not None
     p = _position_m(args.position_mm) if given else front_position(chain)
     if not given and ik.solve(p) is None:  # a short or odd chain

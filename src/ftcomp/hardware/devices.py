@@ -239,8 +239,38 @@ BUILT_IN: Final[tuple[Device, ...]] = (
         "franka://HOST",
         "Franka Research 3 and Panda through the FCI (franky-control)",
         extra="franka",
-        tested="franky-sim 1.0.4's MuJoCo FR3 through franky-control 2.0.0 (protocol and "
-        "motion, not timing; no reflexes); no real arm (docs/hardware.md)",
+        tested="franky-control 2.0.0 against the twin's FR3 (the whole session, reflexes) "
+        "and franky-sim 1.0.4's MuJoCo FR3 (motions); not timing; no real arm "
+        "(docs/hardware.md)",
+        twin=TwinFace(
+            "fr3",
+            "ftcomp.twin.franka_face:FrankaFace",
+            faults=(
+                Fault(
+                    "reflex",
+                    "a Cartesian collision reflex: the motion aborts, the arm stays in reflex "
+                    "mode until recovered",
+                    "cartesian_reflex",
+                    0.5,
+                ),
+                Fault(
+                    "communication-violation",
+                    "the arm's communication_constraints_violation reflex (it saw the host "
+                    "miss its 1 kHz deadline)",
+                    "communication_constraints_violation",
+                    0.5,
+                ),
+                Fault(
+                    "user-stop",
+                    "the user stop is pressed: the motion aborts",
+                    "User Stop pressed",
+                    0.5,
+                ),
+                _NETWORK_LOSS,
+            ),
+            arm="ftcomp.sim.arm:fr3_arm",
+            requires=("franky", "franky_sim"),
+        ),
     ),
     Device(
         "robot",

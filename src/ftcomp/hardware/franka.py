@@ -48,18 +48,20 @@ import time
 from dataclasses import dataclass
 from types import TracebackType
 from typing import Any, Final
+from xml.etree import ElementTree
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from ftcomp.errors import FtcompError, HardwareError, ParameterError
+from ftcomp.chain_ik import ChainIk
+from ftcomp.errors import FtcompError, HardwareError, ParameterError, UnreachablePoseError
 from ftcomp.extras import install_hint
 from ftcomp.hardware.pacing import LatenessOfPacer, RateLimiter
 from ftcomp.hardware.protocols import ClockName, PoseSample, Robot
 from ftcomp.hardware.registry import Uri
 
-__all__ = ["FrankaRobot", "Load", "fault_line", "open_robot", "set_load"]
+__all__ = ["FrankaRobot", "Load", "ModelChain", "fault_line", "open_robot", "set_load"]
 
 #: A velocity motion holds its twist this many control periods after it is reached, then the
 #: arm comes to rest (within its limits) unless the next period's command replaced it.
@@ -74,6 +76,10 @@ _STILL_FOR_S: Final = 0.1
 #: How far from its target a finished blocking move may leave the end effector [m, rad].
 _ARRIVED_M: Final = 1e-3
 _ARRIVED_RAD: Final = math.radians(0.5)
+#: The inverse kinematics' tolerances for a joint move's target [m, rad]: far inside the
+#: arrival check's (the arm's tracking, not the solution, is what that checks).
+_IK_M: Final = 1e-5
+_IK_RAD: Final = math.radians(0.01)
 #: The longest wait for the arm to decelerate when stopping [s] (it takes a few hundred ms from
 #: a compliant loop's speeds within the arm's limits).
 _STOP_WAIT_S: Final = 2.0
@@ -116,9 +122,62 @@ def fault_line(exc: BaseException, errors: str = "") -> str:
     return f"franky {kind}: {text}"
 
 
+def _revolute_limits(urdf: str) -> tuple[tuple[str, ...], NDArray[np.float64]]:
+    """The revolute joints' names and ``[lower, upper]`` [rad] (n, 2) of a URDF's text, in
+    its order (an arm's joints; a hand's fingers are prismatic)."""
+    try:
+        root = ElementTree.fromstring(urdf)
+    except ElementTree.ParseError as exc:
+        raise HardwareError(f"the arm's URDF is not XML ({exc})") from None
+    names, limits = [], []
+    for joint in root.iter("joint"):
+        limit = joint.find("limit")
+        if joint.get("type") != "revolute" or limit is None:
+            continue
+        names.append(str(joint.get("name")))
+        limits.append((float(limit.get("lower", "nan")), float(limit.get("upper", "nan"))))
+    if len(names) != 7 or not np.isfinite(limits).all():
+        raise HardwareError(
+            f"the arm's URDF names {len(names)} revolute joints with limits, not a Franka's 7"
+        )
+    return tuple(names), np.array(limits)
+
+
+class ModelChain:
+    """A Franka's kinematics as a :class:`~ftcomp.chain_ik.Chain`: the end effector's pose and
+    zero Jacobian from libfranka's model of the arm (its own, as ``O_T_EE`` is computed), the
+    joint ranges from the URDF the arm serves.
+
+    Args:
+        franky: the franky module.
+        model: ``franky.Robot.model``.
+        urdf: ``franky.Robot.model_urdf``.
+        F_T_EE: the end effector on the flange (``RobotState.F_T_EE``).
+        EE_T_K: the stiffness frame on it (``RobotState.EE_T_K``).
+    """
+
+    joint_revolute: tuple[bool, ...] = (True,) * 7
+
+    def __init__(self, franky: Any, model: Any, urdf: str, F_T_EE: Any, EE_T_K: Any) -> None:
+        self.joint_names, self.joint_limits = _revolute_limits(urdf)
+        self.joint_limits.setflags(write=False)
+        self._model = model
+        self._frame = franky.Frame.EndEffector
+        self._F_T_EE, self._EE_T_K = F_T_EE, EE_T_K
+
+    def pose_and_jacobian(
+        self, q: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        T = self._model.pose(self._frame, q, self._F_T_EE, self._EE_T_K).matrix
+        J = self._model.zero_jacobian(self._frame, q, self._F_T_EE, self._EE_T_K)
+        return np.asarray(T, dtype=float), np.asarray(J, dtype=float)
+
+
 class FrankaRobot(LatenessOfPacer):
     """A Franka arm through franky (see the module docstring for the URI and the frames).
-    Capabilities: :class:`~ftcomp.hardware.protocols.ReportsLateness`.
+    Capabilities: :class:`~ftcomp.hardware.protocols.ReportsLateness`,
+    :class:`~ftcomp.hardware.protocols.ChecksReachability`,
+    :class:`~ftcomp.hardware.protocols.MovesInJointSpace`.
 
     Args:
         uri: the parsed URI (for messages).
@@ -156,6 +215,7 @@ class FrankaRobot(LatenessOfPacer):
         self._franky: Any = None
         self._moving = False
         self._hold: Any = None
+        self._chain_ik: ChainIk | None = None
 
     # ----------------------------------------------------------------- lifecycle
     @property
@@ -309,6 +369,74 @@ class FrankaRobot(LatenessOfPacer):
             franky.Affine(T), franky.ReferenceType.Absolute, relative_dynamics_factor=self.dynamics
         )
         self._call(lambda: self._connected().move(motion))
+        self._check_arrival(p, R)
+
+    # ----------------------------------------------------------------- joint space
+    def _ik(self) -> ChainIk:
+        """The inverse kinematics on the arm's own model (made on first use: the URDF comes
+        from the arm)."""
+        if self._chain_ik is None:
+            arm = self._connected()
+            state = self._call(lambda: arm.state)
+            chain = ModelChain(
+                self._franky,
+                self._call(lambda: arm.model),
+                self._call(lambda: arm.model_urdf),
+                state.F_T_EE,
+                state.EE_T_K,
+            )
+            self._chain_ik = ChainIk(chain, position_tol_m=_IK_M, angle_tol_rad=_IK_RAD)
+        return self._chain_ik
+
+    def inverse_kinematics(
+        self,
+        p_base_tcp: NDArray[np.float64],
+        R_base_tcp: NDArray[np.float64],
+        q_near_rad: NDArray[np.float64],
+    ) -> NDArray[np.float64] | None:
+        """The joints [rad] putting the end effector at this base-frame pose, found from
+        ``q_near_rad`` first (so near it), within the joint ranges the arm's URDF gives; None
+        if none is found. On the arm's own kinematics (libfranka's model: ``O_T_EE``)."""
+        return self._ik().solve(p_base_tcp, R_base_tcp, q_start=q_near_rad)
+
+    def is_reachable(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64]
+    ) -> bool:
+        """Whether the end effector can be brought to this pose within the joint ranges
+        (ignoring collisions, as every reach check here)."""
+        return (
+            self.inverse_kinematics(p_base_tcp, R_base_tcp, self.joint_positions_rad()) is not None
+        )
+
+    def move_pose_joints(
+        self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64], duration_s: float
+    ) -> None:
+        """Blocking joint move (franky's ``JointMotion``, within the arm's limits scaled by
+        ``dynamics``) to the inverse kinematics nearest the joints now.
+
+        Raises:
+            UnreachablePoseError: no joints within the ranges reach the pose; not moved.
+            HardwareError: the arm refused or aborted the move, or it ended away from the
+                target.
+        """
+        del duration_s
+        p = np.asarray(p_base_tcp, dtype=float)
+        R = np.asarray(R_base_tcp, dtype=float)
+        self.stop()
+        q = self.inverse_kinematics(p, R, self.joint_positions_rad())
+        if q is None:
+            raise UnreachablePoseError(
+                f"{self.uri.text!r}: no joints within the arm's ranges reach "
+                f"{np.round(p * 1e3, 1).tolist()} mm at that orientation; not moved"
+            )
+        franky = self._franky
+        motion = franky.JointMotion(
+            franky.JointState(q.tolist()), relative_dynamics_factor=self.dynamics
+        )
+        self._call(lambda: self._connected().move(motion))
+        self._check_arrival(p, R)
+
+    def _check_arrival(self, p: NDArray[np.float64], R: NDArray[np.float64]) -> None:
         at = self.pose()
         off_m = float(np.linalg.norm(at.p_base_tcp - p))
         off_rad = float(Rotation.from_matrix(R @ at.R_base_tcp.T).magnitude())

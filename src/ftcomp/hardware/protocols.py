@@ -22,7 +22,9 @@ capability                 backends that have it
 =========================  =====================================================================
 :class:`TakesControl`      ``ur://`` (uploads its control script before the first motion)
 :class:`ReportsLateness`   ``ur://``, ``franka://``, ``fixed://`` (paced on the host's clock)
-:class:`ChecksReachability`  ``ur://`` (IK and safety limits), ``sim://`` (the cell's IK)
+:class:`ChecksReachability`  ``ur://`` (IK and safety limits), ``sim://`` (the cell's IK),
+                           ``franka://`` (IK on the arm's own model and URDF ranges)
+:class:`MovesInJointSpace`  ``ur://`` (moveJ), ``franka://`` (franky's JointMotion)
 :class:`CountsLostPackets`  ``netft://`` (RDT sequence numbers)
 :class:`ReportsStreamHealth`  ``netft://``
 :class:`TaresInHardware`   ``netft://`` (RDT's software bias, ``?bias=1``)
@@ -438,7 +440,8 @@ class ChecksReachability(Protocol):
     """A robot that can check a target before moving (inverse kinematics, safety limits).
 
     Backends: ``ur://`` (the controller's inverse kinematics and safety limits; connects the
-    control side), ``sim://`` (the cell's inverse kinematics within the joint ranges).
+    control side), ``sim://`` (the cell's inverse kinematics within the joint ranges),
+    ``franka://`` (inverse kinematics on libfranka's model within the arm's URDF's ranges).
     """
 
     def is_reachable(
@@ -455,7 +458,9 @@ class MovesInJointSpace(Protocol):
     current joints, within its joint ranges (as a pose design's visit check plans it,
     :func:`ftcomp.calibration.reachable_design.plan_visit`).
 
-    Backends: ``ur://`` (``getInverseKinematics(pose, qnear)`` and ``moveJ``).
+    Backends: ``ur://`` (``getInverseKinematics(pose, qnear)`` and ``moveJ``), ``franka://``
+    (:class:`ftcomp.chain_ik.ChainIk` on libfranka's model from the joints now, franky's
+    ``JointMotion``).
     """
 
     def joint_positions_rad(self) -> NDArray[np.float64]:

@@ -9,7 +9,7 @@ readings, so :class:`UrdfChain` walks the chain for every reading at once with t
 (``T_parent_child = child2parent @ joint_motion(q)``, fixed joints merged, Rodrigues for the
 motion); the tests check it against ``UrdfTransformManager.get_transform``. The same walk gives
 :meth:`UrdfChain.pose_and_jacobian` (one configuration and its geometric Jacobian, for inverse
-kinematics: :mod:`.urdf_ik`).
+kinematics: :mod:`ftcomp.chain_ik`).
 
 Joint positions are interpolated linearly to each reading's stamp (per joint, over the messages
 that name it); a stamp outside the recorded span has no pose.

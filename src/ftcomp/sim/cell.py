@@ -279,6 +279,31 @@ class SimCell(ArmMotion, GripperAndSurfaces):
         if not self._twist_active:
             self._qd_cmd[:] = 0.0
 
+    def command_joints(self, q_rad: NDArray[np.float64], qd_rad_per_s: NDArray[np.float64]) -> None:
+        """Set the joint servos' target ``q_rad`` [rad] and its rate ``qd_rad_per_s`` [rad/s]
+        (the velocity feedforward), each shape (N,), for the next :meth:`wait_cycle`; a
+        commanded twist stops. A target beyond a joint's range is held at the range's end.
+
+        For a controller that plans in joint space (a Franka's joint and Cartesian motion
+        generators resolve to joints): a redundant arm's null space then follows the
+        controller, not the twist's differential inverse kinematics.
+
+        Raises:
+            ParameterError: wrong shapes or not finite.
+        """
+        q = np.asarray(q_rad, dtype=float)
+        qd = np.asarray(qd_rad_per_s, dtype=float)
+        n = self._n
+        if q.shape != (n,) or qd.shape != (n,) or not math.isfinite(q.sum() + qd.sum()):
+            raise ParameterError(
+                f"q_rad and qd_rad_per_s must be {n} finite numbers each, got {q_rad!r}, "
+                f"{qd_rad_per_s!r}"
+            )
+        self._twist_world[:] = 0.0
+        self._twist_active = False
+        self._q_cmd = np.clip(q, self._lower, self._upper)
+        self._qd_cmd = qd.copy()
+
     def stop(self) -> None:
         """Zero the commanded velocity at once (the joints hold the commanded position)."""
         self._twist_world[:] = 0.0

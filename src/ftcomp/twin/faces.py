@@ -11,8 +11,8 @@ Each period of the robot face (:attr:`RobotFace.period_s`) the loop:
 
 1. fires a fault that is due (:meth:`RobotFace.inject` / :meth:`SensorFace.inject`, on the
    face that declares it; a fault both declare, such as ``network-loss``, on both);
-2. asks the robot face for the twist to command the cell with (:meth:`RobotFace.cycle`, given
-   the contact force its safety system sees);
+2. lets the robot face command the cell's arm for the period (:meth:`RobotFace.cycle`: a
+   twist or joint targets, given the contact force its safety system sees);
 3. steps the cell's physics through the period, reading the wrist sensor's new samples (at the
    sensor face's rate) after each step;
 4. hands the samples to the sensor face (:meth:`SensorFace.push`) and the newest wrench, with
@@ -54,10 +54,12 @@ class RobotFace(Protocol):
         """Whether a client streams from it now (the fault clock starts then)."""
         ...
 
-    def cycle(self, contact_force_N: float) -> NDArray[np.float64]:
-        """One controller period: the twist to command the cell's TCP with, base frame,
-        shape (6,) [m/s, rad/s]; ``contact_force_N`` is the contact force's magnitude, what a
-        safety system sees [N]."""
+    def cycle(self, contact_force_N: float) -> None:
+        """One controller period: command the cell's arm for it, a twist of its sensor frame
+        (:meth:`~ftcomp.sim.cell.SimCell.command_twist`, as a UR's Cartesian moves) or joint
+        servo targets (:meth:`~ftcomp.sim.cell.SimCell.command_joints`, as a Franka's motion
+        generators); ``contact_force_N`` is the contact force's magnitude, what a safety
+        system sees [N]."""
         ...
 
     def publish(self, wrench_sensor: NDArray[np.float64]) -> None:

@@ -366,7 +366,7 @@ class _Twin:
             clock.start()
             self._fire_fault(now)
             w_contact = cell.true_contact_wrench_base(cell.sensor_pose()[0])
-            cell.command_twist(robot.cycle(float(np.linalg.norm(w_contact[:3]))))
+            robot.cycle(float(np.linalg.norm(w_contact[:3])))
             samples = []
             for _ in range(steps):
                 cell.wait_cycle()

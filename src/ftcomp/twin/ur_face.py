@@ -189,8 +189,8 @@ class UrFace:
     def streaming(self) -> bool:
         return any(s.started for s in self.sessions)
 
-    def cycle(self, contact_force_N: float) -> NDArray[np.float64]:
-        return self.controller.cycle(contact_force_N)
+    def cycle(self, contact_force_N: float) -> None:
+        self.cell.command_twist(self.controller.cycle(contact_force_N))
 
     def publish(self, wrench_sensor: NDArray[np.float64]) -> None:
         if self.silent:
