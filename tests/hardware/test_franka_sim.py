@@ -37,7 +37,13 @@ from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.franka import FrankaRobot, fault_line
-from ftcomp.hardware.protocols import NothingToClose, ReportsLateness, WrenchSample
+from ftcomp.hardware.protocols import (
+    ChecksReachability,
+    MovesInJointSpace,
+    NothingToClose,
+    ReportsLateness,
+    WrenchSample,
+)
 from ftcomp.hardware.registry import open_robot
 from ftcomp.io.calibration_json import FORMAT
 from ftcomp.io.dynamic_json import FORMAT as DYNAMIC_FORMAT
@@ -210,16 +216,21 @@ DESIGNED = [
 ]
 
 
+@pytest.mark.parametrize("move", ["move_pose", "move_pose_joints"])
 def test_moves_reach_three_designed_poses_within_1_mm_and_a_tenth_of_a_degree(
-    sim: Sim,
+    sim: Sim, move: str
 ) -> None:
+    """Both moves: franky's Cartesian motion, and (as record visits poses) a joint motion to
+    ftcomp's inverse kinematics on libfranka's model of the arm."""
     with open_robot(sim.uri("dynamics=0.3")) as robot:
+        assert isinstance(robot, ChecksReachability) and isinstance(robot, MovesInJointSpace)
         home = robot.pose()
         errors = []
         for dp, rpy_deg in DESIGNED:
             p = home.p_base_tcp + np.array(dp)
             R = Rotation.from_euler("xyz", rpy_deg, degrees=True).as_matrix() @ home.R_base_tcp
-            robot.move_pose(p, R, 2.0)
+            assert robot.is_reachable(p, R)
+            getattr(robot, move)(p, R, 2.0)
             robot.settle(5.0)
             at = robot.pose()
             errors.append((np.linalg.norm(at.p_base_tcp - p) * 1e3, _angle_deg(at.R_base_tcp, R)))
