@@ -270,6 +270,7 @@ BUILT_IN: Final[tuple[Device, ...]] = (
             ),
             arm="ftcomp.sim.arm:fr3_arm",
             requires=("franky", "franky_sim"),
+            record_options="dynamics=0.3",
         ),
     ),
     Device(
