@@ -22,18 +22,19 @@ end effector (libfranka's ``F_T_EE``, Desk's end effector) is the wrist sensor's
 the cell's mount puts it, as a UR face's TCP is: ``O_T_EE`` is the sensor's pose.
 
 What this face adds to franky-sim's server, which simulates neither: **reflexes** and the
-arm's **error state**. A contact force above the smallest of the Cartesian force collision
-thresholds the client set (``setCollisionBehavior``'s upper nominal x, y, z; 20 N until set)
-is a ``cartesian_reflex``: the motion stops, its Move command ends ``kReflexAborted`` with the
-reason in the state's ``reflex_reason`` (libfranka's ``last_motion_errors``), the robot mode is
-``kReflex`` and the errors stay (a new motion is aborted the same way) until the client asks
-for automatic error recovery. The control command success rate in the state is the share of
-the last 100 periods that brought a new command during a motion.
+arm's **error state**. A contact force (its mean over 5 ms) above the smallest of the
+Cartesian force collision thresholds the client set (``setCollisionBehavior``'s upper nominal
+x, y, z; 20 N until set) is a ``cartesian_reflex``: the motion stops, its Move command ends
+``kReflexAborted`` with the reason in the state's ``reflex_reason`` (libfranka's
+``last_motion_errors``), the robot mode is ``kReflex`` and the errors stay (a new motion is
+aborted the same way) until the client asks for automatic error recovery. The control
+command success rate in the state is the share of the last 100 periods that brought a new
+command during a motion.
 
-What it does not: torque control (an external controller's torques are not applied: the arm
-holds its joints), the joint-torque collision thresholds, the Franka Hand, and timing (the
-cell's loop paces the state at 1 kHz on the host's clock; a client late by a period is not
-punished: ``communication_constraints_violation`` comes only from its fault).
+What it does not: torque control (a motion with an external controller is refused, libfranka's
+``kCommandNotPossibleRejected``), the joint-torque collision thresholds, the Franka Hand, and
+timing (the cell's loop paces the state at 1 kHz on the host's clock; a client late by a
+period is not punished: ``communication_constraints_violation`` comes only from its fault).
 
 Faults (declared in :mod:`ftcomp.hardware.devices`): ``reflex`` (a ``cartesian_reflex`` now,
 as a collision would), ``communication-violation`` (the robot's
@@ -46,6 +47,7 @@ from __future__ import annotations
 
 import collections
 import contextlib
+import sys
 from typing import Any, Final
 
 import numpy as np
@@ -67,6 +69,10 @@ _ERROR_COUNT: Final = 41
 #: The Cartesian force collision threshold until the client sets one [N] (libfranka's examples'
 #: setDefaultBehavior: 20 N).
 _DEFAULT_FORCE_THRESHOLD_N: Final = 20.0
+#: The reflex compares the mean contact force of this many periods (5 ms) with the threshold:
+#: Franka's external wrench estimate is filtered, and the simulated contact's force has
+#: one-period impulses (25 N as a pressed load leaves the book) no arm would react to.
+_CONTACT_PERIODS: Final = 5
 #: The control command success rate is over this many periods.
 _SUCCESS_WINDOW: Final = 100
 
@@ -139,6 +145,8 @@ class FrankaFace:
             ) from None
         self.silent = False
         self.states_sent = 0
+        #: The contact force of the last periods [N]: the reflex looks at their mean.
+        self.contact_N: collections.deque[float] = collections.deque(maxlen=_CONTACT_PERIODS)
 
     # ------------------------------------------------------------------ RobotFace
     def uri(self) -> str:
@@ -151,7 +159,8 @@ class FrankaFace:
 
     def cycle(self, contact_force_N: float) -> None:
         server = self.server
-        if contact_force_N > server.force_threshold_N:
+        self.contact_N.append(contact_force_N)
+        if sum(self.contact_N) / len(self.contact_N) > server.force_threshold_N:
             server.reflex(_CARTESIAN_REFLEX)
         server.process_commands()
 
@@ -260,6 +269,7 @@ def _cell_arm(franky_sim: Any, base: Any) -> Any:
 def _server(franky_sim: Any, protocol: Any) -> Any:
     """franky-sim's ``FrankaRobotServer`` with the arm's error state (module docstring)."""
     MoveStatus = protocol.MoveStatus
+    ControllerMode = protocol.MoveCommandControllerMode
     RobotCommand = protocol.RobotCommand
     RobotMode = protocol.RobotMode
 
@@ -330,6 +340,14 @@ def _server(franky_sim: Any, protocol: Any) -> Any:
                     if self.mode == RobotMode.kUserStopped
                     else MoveStatus.kReflexAborted
                 )
+            elif controller_mode == ControllerMode.kExternalController:
+                # Torques are not simulated: refused, never accepted and ignored.
+                self.abort_owed = MoveStatus.kCommandNotPossibleRejected
+                print(
+                    "twin: a torque-controlled motion (libfranka's external controller) is "
+                    "refused: the twin's FR3 takes joint and Cartesian motion generators only",
+                    file=sys.stderr,
+                )
 
         def _abort(self, status: Any) -> None:
             motion_id = self.current_motion_id
@@ -349,11 +367,20 @@ def _server(franky_sim: Any, protocol: Any) -> Any:
             self.reflex_reason[error] = True
             self.mode = RobotMode.kReflex
             self._abort(MoveStatus.kReflexAborted)
+            self._stop_here()
 
         def user_stop(self) -> None:
             """The user stop: the motion aborted, the arm stopped until recovered."""
             self.mode = RobotMode.kUserStopped
             self._abort(MoveStatus.kEmergencyAborted)
+            self._stop_here()
+
+        def _stop_here(self) -> None:
+            """A stop holds the arm where it is (the measured joints), not where its motion
+            was heading: in a stiff contact the command runs ahead of the arm, and holding it
+            would press on."""
+            cell = self.robot.cell
+            cell.command_joints(cell.q_rad, np.zeros(cell.n_joints))
 
         def clear_errors(self) -> None:
             self.errors = [False] * _ERROR_COUNT
