@@ -19,6 +19,7 @@ pytest.importorskip("franky_sim", reason="franky-sim is not installed (extra fra
 
 from ftcomp.errors import HardwareError  # noqa: E402
 from ftcomp.hardware.registry import open_robot  # noqa: E402
+from standins.launch import loopback_address  # noqa: E402
 from standins.twin_process import running_twin  # noqa: E402
 
 #: The load hangs this far above the book [mm]; the arm descends this fast [m/s].
@@ -72,3 +73,32 @@ def test_a_torque_controlled_motion_is_refused_not_ignored() -> None:
             arm.move(franky.TorqueStopMotion())
         assert type(refused.value).__name__ in ("CommandException", "ControlException")
     assert "torque-controlled motion" in twin.output()
+
+
+def test_franky_sims_model_of_the_fr3_puts_the_flange_where_the_cells_arm_does() -> None:
+    """The face serves the cell's arm through franky-sim's server, whose Cartesian commands and
+    ``O_T_EE`` come from its own Pinocchio model of the FR3: the two kinematics must agree (both
+    from Franka's published parameters), to rounding."""
+    import dataclasses
+
+    import mujoco
+
+    from ftcomp.sim.arm import fr3_arm
+    from ftcomp.sim.cell_config import CellConfig
+    from ftcomp.twin.franka_face import FrankaFace
+
+    cell = dataclasses.replace(CellConfig(), arm=fr3_arm()).open_cell()
+    face = FrankaFace(loopback_address("test_franka_face_model"), cell, realtime=False, seed=0)
+    try:
+        lower, upper = cell.joint_range_rad
+        rng = np.random.default_rng(5)
+        for _ in range(20):
+            q = lower + (upper - lower) * rng.random(7)
+            T = face.arm.kinematics(q)
+            cell.data.qpos[:7] = q
+            mujoco.mj_forward(cell.model, cell.data)
+            p, R = cell.sensor_pose()
+            assert np.abs(T.translation - p).max() < 1e-12
+            assert np.abs(T.rotation - R).max() < 1e-12
+    finally:
+        face.close()
