@@ -181,8 +181,12 @@ class CsvLog:
         """One row: its first value a time stamp [s], the others numbers; ``t_ns``: the row's
         exact stamp [ns] for the observer (default: the first value in nanoseconds)."""
         fmt = self._format
-        self._writer.writerow([format_time(row[0]), *(fmt(v) for v in row[1:])])
+        line = [format_time(row[0]), *(fmt(v) for v in row[1:])]
+        # Counted, then written, with no call between: a Ctrl-C (Python raises it only at a
+        # call or a loop's jump) lands before both or after both, so ``rows`` is the rows in
+        # the file (flush relies on it).
         self.rows += 1
+        self._writer.writerow(line)
         if self.observer is not None:
             self.observer.row(round(row[0] * 1e9) if t_ns is None else t_ns, row)
 
@@ -193,16 +197,21 @@ class CsvLog:
         self._later.append((row, t_ns))
 
     def flush(self) -> None:
-        """Write the rows kept by :meth:`write_later`, in order. Each is taken off the list
-        before it is written, so a flush cut short (Ctrl-C lands anywhere in the loop, its
-        slack too) leaves the rest for the next one and writes no row twice."""
+        """Write the rows kept by :meth:`write_later`, in order. A row leaves the list once it
+        is in the file (:attr:`rows` counts it), so a flush cut short (Ctrl-C lands anywhere
+        in the loop, its slack too) leaves the rest, the interrupted row included, for the
+        next one: no row written twice, none lost."""
         later = self._later
         if later:
             done = 0
             try:
                 for row, t_ns in later:
-                    done += 1
-                    self.write(row, t_ns)
+                    before = self.rows
+                    try:
+                        self.write(row, t_ns)
+                    finally:
+                        if self.rows != before:
+                            done += 1
             finally:
                 del later[:done]
 
