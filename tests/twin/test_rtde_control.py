@@ -61,11 +61,17 @@ def _controller_wait(receive: object, seconds: float) -> None:
 
 
 def _assert_holds(receive: object) -> None:
-    """Once the TCP is at rest, it stays within 0.1 mm for 0.3 s of the controller's time."""
+    """Once the TCP is at rest (its measured pose moving less than 0.1 mm/s: the servo catches
+    up with the stopped reference after it), it stays within 0.1 mm for 0.3 s of the
+    controller's time."""
     deadline = time.monotonic() + 10.0
-    while np.linalg.norm(receive.getActualTCPSpeed()[:3]) > 1e-6:  # type: ignore[attr-defined]
+    while True:
+        before = receive.getActualTCPPose()  # type: ignore[attr-defined]
+        _controller_wait(receive, 0.02)
+        moved = np.subtract(receive.getActualTCPPose()[:3], before[:3])  # type: ignore[attr-defined]
+        if np.linalg.norm(moved) < 2e-6:
+            break
         assert time.monotonic() < deadline, "the TCP did not come to rest"
-        time.sleep(0.005)
     held = receive.getActualTCPPose()  # type: ignore[attr-defined]
     _controller_wait(receive, 0.3)
     drift = np.subtract(receive.getActualTCPPose()[:3], held[:3])  # type: ignore[attr-defined]
