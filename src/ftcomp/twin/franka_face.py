@@ -116,7 +116,6 @@ class FrankaFace:
             )
         self.host = host
         self.cell = cell
-        self.protocol = protocol
         R_flange_sensor = matrix_from_rotvec(cell.config.rotvec_flange_sensor_rad)
         p_flange_sensor = np.array(cell.config.p_flange_sensor_m, dtype=float)
         # Desk's end effector as a user who weighed the tool would set it: the tool below the
@@ -208,6 +207,11 @@ def _cell_arm(franky_sim: Any, base: Any) -> Any:
             #: No motion runs (the server's idle mode): hold (set by the server).
             self.holding = True
             super().__init__(parameters, has_gripper=False)
+
+        def hold(self) -> None:
+            """No motion runs (the server is idle): hold the last desired joints."""
+            self.last_target = None
+            self.holding = True
 
         def _get_state(self) -> Any:
             cell = self.cell
@@ -321,13 +325,11 @@ def _server(franky_sim: Any, protocol: Any) -> Any:
 
         def _reset_state(self) -> None:  # a client connected or left: the arm holds
             super()._reset_state()
-            self.robot.last_target = None
-            self.robot.holding = True
+            self.robot.hold()
 
         def stop_motion(self, send_preemption_signal: bool = True) -> None:
             super().stop_motion(send_preemption_signal)
-            self.robot.last_target = None
-            self.robot.holding = True
+            self.robot.hold()
 
         def start_motion(self, controller_mode: Any, generator_mode: Any, motion_id: int) -> None:
             self.robot.last_target = None
