@@ -10,7 +10,8 @@ here adds what was measured about it:
   residuals, the paper's Table 3, leave-one-pose-out), and optionally
 - :class:`BiasDrift`: the bias as a polynomial in time (``ftcomp calibrate --bias-drift linear``
   or ``quadratic``), or :class:`StochasticBiasDrift`: the bias as a Matérn 3/2 process in time,
-  its smoothed estimate (``--bias-drift stochastic``), and
+  its smoothed estimate (``--bias-drift stochastic``), or :class:`TemperatureBiasDrift`: the
+  bias as a linear function of the sensor's temperature (``--bias-drift temperature``), and
 - :class:`SensorMap`: a general linear map (gain, crosstalk, misalignment) on the tool's gravity
   wrench, regularised toward the physical model (``ftcomp calibrate --sensor-map linear``), and
 - :class:`MountRotation`: the sensor frame in the frame the orientations were recorded in
@@ -46,14 +47,17 @@ __all__ = [
     "SensorMap",
     "StandardErrors",
     "StochasticBiasDrift",
+    "TemperatureBiasDrift",
+    "TimeBiasDrift",
     "matern32_correlation",
     "mount_matrix",
 ]
 
 #: The identification methods: the paper's two-stage linear fit, or the joint nonlinear fit.
 Method = Literal["paper", "joint"]
-#: The bias drift models: constant, linear or quadratic in time, or a stochastic process.
-DriftModel = Literal["none", "linear", "quadratic", "stochastic"]
+#: The bias drift models: constant, linear or quadratic in time, a stochastic process in time,
+#: or linear in the sensor's temperature.
+DriftModel = Literal["none", "linear", "quadratic", "stochastic", "temperature"]
 #: The polynomial order of each polynomial drift model (``stochastic`` is not a polynomial).
 DRIFT_ORDERS: Final[dict[str, int]] = {"none": 0, "linear": 1, "quadratic": 2}
 #: Rows of times evaluated at once by :meth:`StochasticBiasDrift.offset` (bounds its memory).
@@ -291,8 +295,80 @@ class StochasticBiasDrift:
         )
 
 
-#: Either drift record: what compensation applies by each reading's time.
-AnyBiasDrift = BiasDrift | StochasticBiasDrift
+#: Either drift record in time: what compensation applies by each reading's time.
+TimeBiasDrift = BiasDrift | StochasticBiasDrift
+
+
+@dataclass(frozen=True)
+class TemperatureBiasDrift:
+    """The bias as a linear function of the sensor's temperature:
+    ``bias(T) = [F0, M0] + slopes * (clip(T, T_min_C, T_max_C) - T_ref_C)``.
+
+    Identified jointly with the tool model (``ftcomp calibrate --bias-drift temperature``,
+    :func:`ftcomp.calibration.identify_extended.calibrate_extended`): each pose's mean
+    temperature is the regressor, as each pose's mean time is a polynomial drift's. Applied
+    from each reading's temperature (``temperature_C``), never from its time. Outside the
+    temperatures it was fitted over the bias is held at the nearer end of that range, as a
+    drift in time is held outside its time range (never extrapolated).
+
+    Attributes:
+        T_ref_C: the reference temperature [degC]: the poses' mean (the model's ``F0, M0`` are
+            the bias at it).
+        T_min_C, T_max_C: the temperatures the readings of the calibration spanned [degC].
+        slopes: ``[N/degC]*3 + [N*m/degC]*3``, (6,).
+        std_errors: their standard errors, (6,).
+    """
+
+    T_ref_C: float
+    T_min_C: float
+    T_max_C: float
+    slopes: NDArray[np.float64]
+    std_errors: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        freeze_field(self, "slopes", (6,), finite=True)
+        freeze_field(self, "std_errors", (6,))
+        values = (self.T_min_C, self.T_ref_C, self.T_max_C)
+        if not all(math.isfinite(v) for v in values) or not (
+            self.T_min_C <= self.T_ref_C <= self.T_max_C
+        ):
+            raise ParameterError(
+                "TemperatureBiasDrift needs finite T_min_C <= T_ref_C <= T_max_C, got "
+                f"{self.T_min_C}, {self.T_ref_C}, {self.T_max_C}"
+            )
+
+    @property
+    def name(self) -> DriftModel:
+        """``"temperature"``."""
+        return "temperature"
+
+    def offset(self, temperature_C: ArrayLike) -> NDArray[np.float64]:
+        """Bias at ``temperature_C`` [degC] minus the bias at ``T_ref_C``, shape (N, 6) (or
+        (6,)); held at the range's nearer end outside ``T_min_C .. T_max_C``."""
+        T = np.clip(np.asarray(temperature_C, dtype=float), self.T_min_C, self.T_max_C)
+        return np.multiply.outer(T - self.T_ref_C, self.slopes)
+
+    def outside(self, T_min_C: float, T_max_C: float) -> str | None:
+        """What :meth:`offset` does for temperatures in ``T_min_C .. T_max_C`` [degC] beyond
+        the fitted range, as a sentence, or None when they are all within it."""
+        parts = []
+        if T_min_C < self.T_min_C:
+            parts.append(f"below {self.T_min_C:.4g} degC the bias is held at its value there")
+        if T_max_C > self.T_max_C:
+            parts.append(f"above {self.T_max_C:.4g} degC the bias is held at its value there")
+        if not parts:
+            return None
+        return (
+            f"temperatures {T_min_C:.4g} .. {T_max_C:.4g} degC reach beyond the temperature "
+            f"bias model's range {self.T_min_C:.4g} .. {self.T_max_C:.4g} degC: "
+            + "; ".join(parts)
+            + " (not extrapolated)"
+        )
+
+
+#: Any drift record: in time (applied by each reading's time) or in temperature (by each
+#: reading's temperature).
+AnyBiasDrift = BiasDrift | StochasticBiasDrift | TemperatureBiasDrift
 
 
 def mount_matrix(phi: NDArray[np.float64], axes: MountAxes | None) -> NDArray[np.float64]:
@@ -398,8 +474,8 @@ class Calibration:
         condition_number: of the force regressor (Eq. 7); large means poses too alike.
         warnings: human-readable warnings.
         bias_drift: the bias as a function of time (``--bias-drift``): a polynomial
-            (:class:`BiasDrift`) or a smoothed process (:class:`StochasticBiasDrift`), or None:
-            constant.
+            (:class:`BiasDrift`) or a smoothed process (:class:`StochasticBiasDrift`); or of the
+            sensor's temperature (:class:`TemperatureBiasDrift`); or None: constant.
         mount: the sensor frame's rotation in the frame the orientations were recorded in
             (``--identify-mount``), or None: the orientations are the sensor's.
         sensor_map: the general linear map (``--sensor-map linear``), or None: the physical
@@ -418,7 +494,7 @@ class Calibration:
     loo_error: NDArray[np.float64] = field(repr=False)
     condition_number: float = math.inf
     warnings: tuple[str, ...] = ()
-    bias_drift: BiasDrift | StochasticBiasDrift | None = None
+    bias_drift: BiasDrift | StochasticBiasDrift | TemperatureBiasDrift | None = None
     mount: MountRotation | None = None
     sensor_map: SensorMap | None = None
 

@@ -2,7 +2,8 @@
 
 :func:`calibrate_extended` is the joint method of :func:`ftcomp.calibration.identify.calibrate`
 with extra parameters: a bias that drifts with time (:mod:`.drift`, ``ftcomp calibrate
---bias-drift``) and the sensor's mount rotation in the frame the orientations were recorded in
+--bias-drift``) or follows the sensor's temperature (:mod:`.temperature`, ``--bias-drift
+temperature``) and the sensor's mount rotation in the frame the orientations were recorded in
 (:mod:`.mount`, ``--identify-mount``). The fit is :func:`ftcomp.calibration.extended.fit_extended`;
 the result is a :class:`~ftcomp.calibration_record.Calibration` carrying the
 :class:`~ftcomp.calibration_record.BiasDrift` and :class:`~ftcomp.calibration_record.MountRotation`
@@ -11,6 +12,7 @@ it found, with their standard errors.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Final, Literal, get_args
 
@@ -29,7 +31,18 @@ from ftcomp.calibration.identify import (
 from ftcomp.calibration.methods import fit_paper, joint_sigma
 from ftcomp.calibration.mount import MIN_POSES, mount_from_fit, mount_warnings
 from ftcomp.calibration.stochastic import MIN_POSES as STOCHASTIC_MIN_POSES
-from ftcomp.calibration.stochastic import StochasticFit, fit_stochastic, pose_times
+from ftcomp.calibration.stochastic import (
+    StochasticFit,
+    fit_stochastic,
+    linear_bias_log_likelihood,
+    pose_times,
+)
+from ftcomp.calibration.temperature import (
+    TemperatureRegressor,
+    sample_temperatures,
+    temperature_drift_from_fit,
+    temperature_regressor,
+)
 from ftcomp.calibration_record import (
     DRIFT_ORDERS,
     SENSOR_MAP_SUPPORT,
@@ -48,6 +61,7 @@ __all__ = [
     "BIAS_CHOICES",
     "DRIFT_SUPPORT",
     "SENSOR_MAP_CHOICES",
+    "TEMPERATURE_SUPPORT",
     "BiasChoice",
     "ModelChoice",
     "ModelSpec",
@@ -58,7 +72,7 @@ __all__ = [
 
 #: The bias model to identify: one of :data:`~ftcomp.calibration_record.DriftModel`, or
 #: ``"auto"``: the one the data support (:func:`identify`).
-BiasChoice = Literal["auto", "none", "linear", "quadratic", "stochastic"]
+BiasChoice = Literal["auto", "none", "linear", "quadratic", "stochastic", "temperature"]
 BIAS_CHOICES: Final[tuple[str, ...]] = get_args(BiasChoice)
 #: The sensor map: ``"physical"`` (the paper's model), ``"linear"`` (fit the general linear map
 #: and apply it where the data support it) or ``"auto"`` (``"linear"`` wherever the bias model
@@ -72,6 +86,13 @@ SENSOR_MAP_CHOICES: Final[tuple[str, ...]] = get_args(SensorMapChoice)
 #: is Akaike's criterion (one per parameter); docs/calibration.md measures how often it
 #: is passed without drift and what it picks on the real recording.
 DRIFT_SUPPORT: Final = 7.0
+#: The same rule for a bias linear in the sensor's temperature: it adds 6 hyperparameters (a
+#: scale per axis, the slopes integrated out), so Akaike's criterion is a gain of 6. Where both
+#: are candidates, the one whose gain exceeds its own threshold by more is taken.
+TEMPERATURE_SUPPORT: Final = 6.0
+#: A drift polynomial's order by the bias model, the temperature model's slopes a first order
+#: term in the scaled temperature.
+_ORDERS: Final = {**DRIFT_ORDERS, "temperature": 1}
 
 _LOO_REFITS: Final = 30  # leave-one-pose-out by exact refits up to this many poses
 
@@ -84,8 +105,8 @@ class ModelSpec:
         method: ``"paper"`` (the paper's two-stage linear fit: a constant bias, the physical
             map, nothing else) or ``"joint"``.
         bias_drift: a :data:`~ftcomp.calibration_record.DriftModel`, or ``"auto"`` (the
-            default): a stochastic bias where the data support it (:func:`identify`), else a
-            constant one.
+            default): a stochastic bias or one that follows the sensor's temperature where the
+            data support it (:func:`identify`), else a constant one.
         identify_mount: None, ``"yaw"`` or ``"full"`` (:mod:`.mount`).
         sensor_map: ``"physical"``, ``"linear"`` or ``"auto"`` (the default: ``"linear"``
             wherever the bias model combines with it; applied only where the data support it).
@@ -93,7 +114,7 @@ class ModelSpec:
     Raises:
         ParameterError: a choice out of its list, or one that does not combine with another
             (the paper method with anything beyond it; the stochastic bias or the map with a
-            mount or a polynomial drift), naming the fields.
+            mount, a polynomial or a temperature drift), naming the fields.
     """
 
     method: Method = "joint"
@@ -129,11 +150,12 @@ class ModelSpec:
                 field=("method", "bias_drift", "identify_mount", "sensor_map"),
             )
         gp = self.bias_drift == "stochastic" or self.sensor_map == "linear"
-        if gp and (self.identify_mount is not None or self.bias_drift in ("linear", "quadratic")):
+        regressed = self.bias_drift in ("linear", "quadratic", "temperature")
+        if gp and (self.identify_mount is not None or regressed):
             raise ParameterError(
                 "bias_drift stochastic and sensor_map linear combine with neither identify_mount "
-                "nor a polynomial drift (identify the mount first, with a constant or "
-                "polynomial bias)",
+                "nor a polynomial or temperature drift (identify the mount first, with a "
+                "constant, polynomial or temperature bias)",
                 field=("bias_drift", "sensor_map", "identify_mount"),
             )
 
@@ -163,11 +185,15 @@ def identify(
     The one entry point for every model: ``spec.bias_drift == "auto"`` compares a constant
     bias with a stochastic one (:mod:`.stochastic`) by their restricted marginal likelihoods
     (the same framework, nested models) and takes the stochastic one when it gains more than
-    :data:`DRIFT_SUPPORT`; it needs each reading's time and 6+ poses recorded in order, else the
-    bias is constant. A polynomial drift is never chosen: it is the stochastic model's poorer
-    cousin on every recording measured (docs/calibration.md) and extrapolates. ``sensor_map ==
-    "auto"`` fits the general linear map with a constant or stochastic bias and applies it where
-    its log Bayes factor exceeds :data:`~ftcomp.calibration_record.SENSOR_MAP_SUPPORT`.
+    :data:`DRIFT_SUPPORT`; it needs each reading's time and 6+ poses recorded in order. Where
+    the samples carry the sensor's temperature (``temperature_C``), a bias linear in it is a
+    candidate in the same framework (:func:`~.stochastic.linear_bias_log_likelihood`, its gain
+    against :data:`TEMPERATURE_SUPPORT`); of the candidates whose gain passes its threshold the
+    one passing it by most is taken, else the bias is constant. A polynomial drift is never
+    chosen: it is the stochastic model's poorer cousin on every recording measured
+    (docs/calibration.md) and extrapolates. ``sensor_map == "auto"`` fits the general linear
+    map with a constant or stochastic bias and applies it where its log Bayes factor exceeds
+    :data:`~ftcomp.calibration_record.SENSOR_MAP_SUPPORT`.
 
     Returns:
         The calibration, and what was fitted with the reasons.
@@ -195,7 +221,7 @@ def identify(
         if not mapped:
             reasons.append(
                 "the physical sensor map: the linear map combines with neither identify_mount "
-                "nor a polynomial drift"
+                "nor a polynomial or temperature drift"
             )
     else:
         mapped = spec.sensor_map == "linear"
@@ -243,36 +269,94 @@ def _verdict(record: SensorMap | None) -> list[str]:
 
 
 def _choose_bias(samples: Samples) -> tuple[DriftModel, str]:
-    """A stochastic bias where the data support it, else a constant one; and why."""
-    if samples.t is None:
-        return "none", (
-            "a constant bias: the samples have no times ('t'), so a drift cannot be told from "
-            "the tool"
+    """The bias model the data support best among constant, stochastic in time and (with the
+    sensor's temperatures) linear in temperature; and why."""
+    why_not: list[str] = []
+    t_pose = _time_candidate(samples, why_not)
+    temperature = _temperature_candidate(samples, why_not)
+    if t_pose is None and temperature is None:
+        return "none", "a constant bias: " + "; ".join(why_not)
+    base = calibrate(samples, method="joint", leave_one_out=False)
+    inputs = _StochasticInputs.of(samples, base, drift=t_pose is not None)
+    constant = inputs.fit(drift=False, sensor_map=False, leave_one_out=False)[0]
+    gains: dict[DriftModel, tuple[float, float]] = {}  # model: (gain, its threshold)
+    time_constant_s = math.nan
+    if t_pose is not None:
+        drifting = inputs.fit(drift=True, sensor_map=False, leave_one_out=False)[0]
+        gains["stochastic"] = (drifting.log_likelihood - constant.log_likelihood, DRIFT_SUPPORT)
+        time_constant_s = drifting.drift.time_constant_s
+    if temperature is not None:
+        linear = linear_bias_log_likelihood(
+            inputs.wrench, inputs.R, inputs.sigma, inputs.theta0, temperature.tau
         )
+        gains["temperature"] = (linear - constant.log_likelihood, TEMPERATURE_SUPPORT)
+    best = max(gains, key=lambda m: gains[m][0] - gains[m][1])
+    gain, need = gains[best]
+    also = "".join(f"; {why}" for why in why_not)
+    if list(gains) == ["stochastic"]:  # the drift in time alone: the sentences of before
+        if gain > need:
+            return "stochastic", (
+                f"a stochastic bias drift: the data support it (restricted log likelihood "
+                f"{gain:+.1f} over a constant bias, > {need:g}; time constant "
+                f"{time_constant_s:.3g} s){also}"
+            )
+        return "none", (
+            f"a constant bias: the data do not support a drift (restricted log likelihood of a "
+            f"stochastic drift {gain:+.1f} over it, needs > {need:g}){also}"
+        )
+    names = {"stochastic": "a stochastic drift", "temperature": "a temperature bias"}
+    evidence = ", ".join(f"{names[m]} {g:+.1f} (needs > {n:g})" for m, (g, n) in gains.items())
+    if gain <= need:
+        return "none", (
+            f"a constant bias: the data do not support a drift (restricted log likelihood over "
+            f"it: {evidence}){also}"
+        )
+    if best == "stochastic" or temperature is None:
+        what = f"a stochastic bias drift (time constant {time_constant_s:.3g} s)"
+    else:
+        what = (
+            f"a bias linear in the sensor's temperature ({temperature.T_min_C:.4g} .. "
+            f"{temperature.T_max_C:.4g} degC)"
+        )
+    return best, (
+        f"{what}: the data support it best (restricted log likelihood over a constant bias: "
+        f"{evidence}){also}"
+    )
+
+
+def _time_candidate(samples: Samples, why_not: list[str]) -> NDArray[np.float64] | None:
+    """The poses' mean times when a stochastic drift in time is a candidate, else None with
+    the reason added to ``why_not``."""
+    if samples.t is None:
+        why_not.append("the samples have no times ('t'), so a drift cannot be told from the tool")
+        return None
     try:
         t_pose = pose_times(samples)
     except IdentificationError as exc:
-        return "none", f"a constant bias: no drift model fits these times ({exc})"
+        why_not.append(f"no drift model fits these times ({exc})")
+        return None
     if len(t_pose) < STOCHASTIC_MIN_POSES:
-        return "none", (
-            f"a constant bias: {len(t_pose)} poses; a drift model needs "
-            f"{STOCHASTIC_MIN_POSES} or more"
-        )
-    base = calibrate(samples, method="joint", leave_one_out=False)
-    inputs = _StochasticInputs.of(samples, base, drift=True)
-    constant = inputs.fit(drift=False, sensor_map=False, leave_one_out=False)[0]
-    drifting = inputs.fit(drift=True, sensor_map=False, leave_one_out=False)[0]
-    gain = drifting.log_likelihood - constant.log_likelihood
-    if gain > DRIFT_SUPPORT:
-        return "stochastic", (
-            f"a stochastic bias drift: the data support it (restricted log likelihood "
-            f"{gain:+.1f} over a constant bias, > {DRIFT_SUPPORT:g}; time constant "
-            f"{drifting.drift.time_constant_s:.3g} s)"
-        )
-    return "none", (
-        f"a constant bias: the data do not support a drift (restricted log likelihood of a "
-        f"stochastic drift {gain:+.1f} over it, needs > {DRIFT_SUPPORT:g})"
-    )
+        why_not.append(f"{len(t_pose)} poses; a drift model needs {STOCHASTIC_MIN_POSES} or more")
+        return None
+    return t_pose
+
+
+def _temperature_candidate(samples: Samples, why_not: list[str]) -> TemperatureRegressor | None:
+    """The poses' temperatures when the samples carry them and a temperature bias is a
+    candidate, else None (the reason added to ``why_not`` where the samples have temperatures)."""
+    temperature = sample_temperatures(samples)
+    if temperature is None:
+        return None
+    try:
+        regressor = temperature_regressor(samples, temperature)
+    except IdentificationError as exc:
+        why_not.append(f"no temperature bias ({exc})")
+        return None
+    needed = 3 + _ORDERS["temperature"]
+    if len(regressor.tau) < needed:
+        why_not.append(f"{len(regressor.tau)} poses; a temperature bias needs {needed} or more")
+        return None
+    return regressor
 
 
 def calibrate_extended(
@@ -286,10 +370,12 @@ def calibrate_extended(
     """The joint method with a drifting bias and/or an unknown mount rotation or sensor map.
 
     Args:
-        samples: readings at distinct poses; a drift model needs their times (``t``).
-        bias_drift: ``"none"``, ``"linear"`` or ``"quadratic"`` in time, or
+        samples: readings at distinct poses; a drift model needs their times (``t``), the
+            temperature model their sensor temperatures (``temperature_C``).
+        bias_drift: ``"none"``, ``"linear"`` or ``"quadratic"`` in time,
             ``"stochastic"`` (:mod:`.stochastic`: a Matérn 3/2 process, smoothed; not with a
-            mount).
+            mount), or ``"temperature"`` (linear in the sensor's temperature, the slopes fitted
+            with the tool model as a linear drift's rates are, :mod:`.temperature`).
         identify_mount: None, ``"yaw"`` (about the recorded frame's z) or ``"full"``; the
             samples' orientations are then the recorded frame's (flange, TCP).
         leave_one_out: each pose predicted (at its time) by a refit to the others.
@@ -298,15 +384,16 @@ def calibrate_extended(
             constant or stochastic bias, not with a mount.
 
     Raises:
-        IdentificationError: no ``t`` for a drift model, too few poses for the parameters,
+        IdentificationError: no ``t`` for a drift model (no temperatures, or temperatures
+            that do not vary, for the temperature model), too few poses for the parameters,
             (stochastic) times that go back.
     """
     if bias_drift == "stochastic" or sensor_map:
-        if identify_mount is not None or bias_drift in ("linear", "quadratic"):
+        if identify_mount is not None or bias_drift in ("linear", "quadratic", "temperature"):
             raise IdentificationError(
                 "bias_drift stochastic and sensor_map combine with neither identify_mount "
-                "nor a polynomial drift (identify the mount first, with a constant or "
-                "polynomial bias)",
+                "nor a polynomial or temperature drift (identify the mount first, with a "
+                "constant, polynomial or temperature bias)",
                 field=("bias_drift", "sensor_map", "identify_mount"),
             )
         return _calibrate_stochastic(
@@ -315,12 +402,17 @@ def calibrate_extended(
             drift=bias_drift == "stochastic",
             sensor_map=sensor_map,
         )
-    order = DRIFT_ORDERS.get(bias_drift)
+    order = _ORDERS.get(bias_drift)
     if order is None:
         raise IdentificationError(
-            f"bias drift must be one of {', '.join([*DRIFT_ORDERS, 'stochastic'])}"
+            f"bias drift must be one of {', '.join([*_ORDERS, 'stochastic'])}"
         )
-    if order and samples.t is None:
+    thermal = (
+        temperature_regressor(samples, sample_temperatures(samples))
+        if bias_drift == "temperature"
+        else None
+    )
+    if order and thermal is None and samples.t is None:
         raise IdentificationError(
             f"{samples.source}: bias_drift {bias_drift} needs each reading's time: the file "
             "has no 't' (or 't_ns') column",
@@ -339,8 +431,8 @@ def calibrate_extended(
             f"{samples.source}: {P} poses; {' with '.join(what)} needs at least {needed}",
             field=("bias_drift", "identify_mount"),
         )
-    times = drift_times(samples, order) if order else None
-    tau = None if times is None else times.tau
+    times = drift_times(samples, order) if order and thermal is None else None
+    tau = thermal.tau if thermal is not None else None if times is None else times.tau
     paper = fit_paper(wrench, R)
     sigma = joint_sigma(wrench, R, var_mean, count, paper)
     fit = fit_extended(
@@ -349,11 +441,14 @@ def calibrate_extended(
     model = model_from_theta(fit.theta)
     std_errors = standard_errors_from_fit(fit.theta, fit.covariance)
     drift = None if times is None else drift_from_fit(fit, times)
+    heat = None if thermal is None else temperature_drift_from_fit(fit, thermal)
     mount = mount_from_fit(fit) if identify_mount is not None else None
     R_sensor = R if mount is None else R @ mount.R_rec_sensor
     predicted = model.predict(R_sensor)
     if drift is not None and times is not None:
         predicted = predicted + drift.offset(times.t_s)
+    if heat is not None and thermal is not None:
+        predicted = predicted + heat.offset(thermal.T_pose_C)
     residuals = wrench - predicted
     loo = np.full_like(wrench, np.nan)
     if leave_one_out and needed < P:
@@ -363,7 +458,7 @@ def calibrate_extended(
         warnings += mount_warnings(mount)
     return replace(
         _refitted(base, model, std_errors, wrench, residuals, loo, warnings),
-        bias_drift=drift,
+        bias_drift=heat if heat is not None else drift,
         mount=mount,
     )
 

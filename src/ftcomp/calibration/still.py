@@ -28,7 +28,9 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from ftcomp.calibration.temperature import sample_temperatures
 from ftcomp.errors import IdentificationError, ParameterError
+from ftcomp.hardware.protocols import TEMPERATURE_CHANNEL
 from ftcomp.samples import Samples
 
 __all__ = [
@@ -286,6 +288,7 @@ def still_samples(samples: Samples, config: StillConfig) -> StillSamples:
             f"{source}: no still segment in {len(t_ns)} readings{config.why_none(unsettled)}"
         )
     rows, ids = segment_rows(segments)
+    temperature = sample_temperatures(samples)  # kept for a bias that follows it
     kept = Samples(
         wrench_sensor=samples.wrench_sensor[rows],
         R_base_sensor=samples.R_base_sensor[rows],
@@ -294,5 +297,6 @@ def still_samples(samples: Samples, config: StillConfig) -> StillSamples:
         t=np.asarray(samples.t, dtype=float)[rows],
         source=source,
         warnings=samples.warnings,
+        extras={} if temperature is None else {TEMPERATURE_CHANNEL: temperature[rows]},
     )
     return StillSamples(kept, tuple(segments), int(t_ns[0]), len(t_ns), unsettled, config)

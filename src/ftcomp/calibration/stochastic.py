@@ -36,7 +36,13 @@ from ftcomp.calibration_record import StochasticBiasDrift, matern32_correlation
 from ftcomp.errors import IdentificationError
 from ftcomp.samples import Samples
 
-__all__ = ["MIN_POSES", "StochasticFit", "fit_stochastic", "pose_times"]
+__all__ = [
+    "MIN_POSES",
+    "StochasticFit",
+    "fit_stochastic",
+    "linear_bias_log_likelihood",
+    "pose_times",
+]
 
 #: Poses needed: 12 tool parameters and 9 hyperparameters from 6 numbers per pose.
 MIN_POSES: Final = 6
@@ -113,10 +119,14 @@ class _Problem:
         sigma: NDArray[np.float64],
         t: NDArray[np.float64],
         n: int,
+        regressor: NDArray[np.float64] | None = None,
     ) -> None:
         self.wrench, self.R, self.sigma2, self.t = wrench, R, sigma**2, t
         self.P, self.n = len(wrench), n
         self.dt = t[:, None] - t[None, :]
+        #: With a regressor ``z`` the process is linear in it, ``g_j = k_j z``, ``k_j ~ N(0,
+        #: scale_j^2)``: its correlation ``z z^T`` (the time constant unused); else Matérn 3/2.
+        self.linear = None if regressor is None else np.outer(regressor, regressor)
         self.theta = np.zeros(n)
         self.r = np.zeros((self.P, 6))
         self.J = np.zeros((6, self.P, n))
@@ -141,7 +151,7 @@ class _Problem:
     def factor(self, h: NDArray[np.float64]) -> NDArray[np.float64]:
         """Cholesky factors of ``V_j`` for hyperparameters ``h`` (log), (6, P, P)."""
         ell, scale, white = _unpack(h)
-        rho = matern32_correlation(self.dt, ell)
+        rho = matern32_correlation(self.dt, ell) if self.linear is None else self.linear
         V = scale[:, None, None] ** 2 * rho[None]
         diag = self.sigma2.T + (white**2)[:, None]
         V[:, np.arange(self.P), np.arange(self.P)] += diag
@@ -217,8 +227,6 @@ def fit_stochastic(
     Returns:
         The fit, and each pose's leave-one-pose-out error (P, 6) (hyperparameters held).
     """
-    from scipy.optimize import minimize  # imported here: it takes a second to load
-
     P = len(wrench)
     if drift and P < MIN_POSES:
         raise IdentificationError(
@@ -242,6 +250,18 @@ def fit_stochastic(
     if not drift:  # the process held at a negligible size: a constant bias
         h[1:7] = np.log(spread * 1e-9)
         bounds[:7] = [(v, v) for v in h[:7]]
+    h, nll = _optimise(problem, h, bounds)
+    fit = _result(problem, h, nll, t_range_s or (float(t_pose_s[0]), float(t_pose_s[-1])))
+    return fit, _leave_one_out(problem, h) if leave_one_out else np.full((P, 6), np.nan)
+
+
+def _optimise(
+    problem: _Problem, h: NDArray[np.float64], bounds: list[tuple[float, float]]
+) -> tuple[NDArray[np.float64], float]:
+    """REML hyperparameters alternating with Gauss-Newton steps on ``theta`` (left in
+    ``problem``): the log hyperparameters and the minus log likelihood reached."""
+    from scipy.optimize import minimize  # imported here: it takes a second to load
+
     nll = math.inf
     for _ in range(_ROUNDS):
         result = minimize(problem.neg_log_likelihood, h, method="L-BFGS-B", bounds=bounds)
@@ -256,8 +276,41 @@ def fit_stochastic(
             problem.linearise(theta)
             if np.all(np.abs(delta) <= 1e-10 * np.maximum(np.abs(theta), 1.0)):
                 break
-    fit = _result(problem, h, nll, t_range_s or (float(t_pose_s[0]), float(t_pose_s[-1])))
-    return fit, _leave_one_out(problem, h) if leave_one_out else np.full((P, 6), np.nan)
+    return h, nll
+
+
+def linear_bias_log_likelihood(
+    wrench: NDArray[np.float64],
+    R: NDArray[np.float64],
+    sigma: NDArray[np.float64],
+    theta0: NDArray[np.float64],
+    regressor: NDArray[np.float64],
+) -> float:
+    """The restricted log marginal likelihood of a bias linear in a per-pose regressor (the
+    sensor's temperature), in the framework of :func:`fit_stochastic`: comparable with its
+    ``log_likelihood`` for the same poses, a constant bias being this model with its slopes
+    held at zero (nested, as the process in time is).
+
+    The bias is ``[F0, M0] + k z_i`` per axis with ``k_j ~ N(0, scale_j^2)`` integrated out:
+    the covariance ``V_j = scale_j^2 z z^T + diag(sigma^2 + white^2)``; its hyperparameters (six
+    scales, the two white scatters) by REML, the tool parameters integrated out as there.
+
+    Args:
+        wrench, R, sigma, theta0: as :func:`fit_stochastic`.
+        regressor: each pose's regressor, centred and scaled to about -1 .. 1, (P,).
+    """
+    problem = _Problem(wrench, R, sigma, np.arange(len(wrench), dtype=float), 12, regressor)
+    problem.linearise(np.asarray(theta0[:12], dtype=float))
+    spread = np.maximum(np.std(problem.r, axis=0), 1e-9)
+    floor = np.maximum(np.array([spread[:3].mean(), spread[3:].mean()]), 1e-9)
+    h = np.concatenate([[0.0], np.log(spread), np.log(floor / 4.0)])
+    bounds = (
+        [(0.0, 0.0)]  # the time constant: unused by a linear bias
+        + [(math.log(s * 1e-4), math.log(s * 10.0)) for s in spread]
+        + [(math.log(f * 1e-5), math.log(f * 10.0)) for f in floor]
+    )
+    _, nll = _optimise(problem, h, bounds)
+    return -nll
 
 
 def _leave_one_out(problem: _Problem, h: NDArray[np.float64]) -> NDArray[np.float64]:

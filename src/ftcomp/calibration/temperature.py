@@ -15,14 +15,22 @@ base-frame vector, tilt included; ``R_k = R_base_sensor`` of pose k), then torqu
 the pose's regressor less its mean: nothing (``constant``), its time (``time``) or its
 temperature (``temperature``).
 
-Which model: the one whose leave-one-pose-out force error (each pose predicted from a fit
-without it, :func:`held_out_errors`) is smallest: the same evidence the other models are
-chosen by (:mod:`.loo`). ``bench/bench_temperature.py`` shows the gain on a simulated sensor
-whose bias follows its temperature.
+:func:`choose_bias_model` picks the one whose leave-one-pose-out force error (each pose
+predicted from a fit without it, :func:`held_out_errors`) is smallest;
+``bench/bench_temperature.py`` shows the gain on a simulated sensor whose bias follows its
+temperature. These two-stage fits are the reference the bench uses.
+
+``ftcomp calibrate`` fits the temperature model through the joint method instead
+(:func:`~ftcomp.calibration.identify_extended.calibrate_extended` with
+``bias_drift="temperature"``: the tool model, the bias and its slopes in one weighted fit, with
+standard errors), on the regressor this module prepares (:func:`sample_temperatures`,
+:func:`temperature_regressor`), and its ``auto`` choice weighs the temperature model by the same
+restricted likelihood as the drift in time (:func:`~ftcomp.calibration.identify_extended.identify`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Final, Literal, get_args
 
@@ -30,16 +38,25 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.arrays import freeze_field
+from ftcomp.calibration.extended import ExtendedFit
+from ftcomp.calibration.identify import pose_groups
+from ftcomp.calibration_record import TemperatureBiasDrift
 from ftcomp.errors import IdentificationError, ParameterError
+from ftcomp.hardware.protocols import TEMPERATURE_CHANNEL
+from ftcomp.samples import Samples
 
 __all__ = [
     "BIAS_MODELS",
     "BiasModel",
     "BiasModelChoice",
     "TemperatureFit",
+    "TemperatureRegressor",
     "choose_bias_model",
     "fit_bias_model",
     "held_out_errors",
+    "sample_temperatures",
+    "temperature_drift_from_fit",
+    "temperature_regressor",
 ]
 
 #: The bias's regressor: none, the pose's time, or the sensor's temperature.
@@ -249,3 +266,130 @@ def choose_bias_model(
     best: BiasModel = min(values, key=lambda m: force[m])
     fit = fit_bias_model(R_base_sensor, wrench, values[best], best)
     return BiasModelChoice(best, fit, force, torque)
+
+
+def sample_temperatures(samples: Samples) -> NDArray[np.float64] | None:
+    """Each reading's sensor temperature [degC], (N,), or None when the samples have none.
+
+    From the recording's extra channel ``temperature_C`` (:attr:`~ftcomp.samples.Samples.extras`)
+    or, for samples read from a file, its ``temperature_C`` column.
+
+    Raises:
+        IdentificationError: a temperature that is not a finite number (naming its row).
+    """
+    if TEMPERATURE_CHANNEL in samples.extras:
+        values = np.asarray(samples.extras[TEMPERATURE_CHANNEL], dtype=float)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            k = int(bad[0])
+            raise IdentificationError(
+                f"{samples.source}: row {k + 1}, column {TEMPERATURE_CHANNEL!r}: "
+                f"{values[k]!r} is not a finite temperature",
+                field="bias_drift",
+            )
+        return values
+    if TEMPERATURE_CHANNEL not in samples.header:
+        return None
+    column = samples.header.index(TEMPERATURE_CHANNEL)
+    out = np.empty(len(samples))
+    for k, row in enumerate(samples.rows):
+        cell = row[column] if column < len(row) else ""
+        try:
+            value = float(cell)
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value):
+            raise IdentificationError(
+                f"{samples.source}: row {k + 1}, column {TEMPERATURE_CHANNEL!r}: {cell!r} is "
+                "not a finite temperature [degC]",
+                field="bias_drift",
+            )
+        out[k] = value
+    return out
+
+
+@dataclass(frozen=True)
+class TemperatureRegressor:
+    """Each pose's mean temperature, scaled for the joint fit as a drift's times are
+    (:class:`~ftcomp.calibration.drift.DriftTimes`): ``tau = (T - T_ref_C) / half_span_C``.
+
+    Attributes:
+        tau: each pose's scaled temperature, (P,).
+        T_ref_C: the reference temperature [degC]: the poses' mean.
+        T_min_C, T_max_C: the readings' temperature range [degC].
+        half_span_C: half that range [degC] (at least 1e-9).
+    """
+
+    tau: NDArray[np.float64]
+    T_ref_C: float
+    T_min_C: float
+    T_max_C: float
+    half_span_C: float
+
+    def __post_init__(self) -> None:
+        freeze_field(self, "tau", (len(self.tau),), finite=True)
+
+    @property
+    def T_pose_C(self) -> NDArray[np.float64]:
+        """Each pose's mean temperature [degC], (P,)."""
+        return self.T_ref_C + self.tau * self.half_span_C
+
+
+#: The smallest spread of the poses' mean temperatures a slope is fitted on [degC]: below it
+#: the temperature is taken as constant (a sensor reporting a fixed value, or a few mK).
+MIN_SPREAD_C: Final = 0.01
+
+
+def temperature_regressor(
+    samples: Samples, temperature_C: NDArray[np.float64] | None
+) -> TemperatureRegressor:
+    """The poses' mean temperatures (poses as :func:`~ftcomp.calibration.identify.pose_means`
+    groups them) as the regressor of a bias linear in temperature.
+
+    Args:
+        samples: the readings.
+        temperature_C: each reading's temperature [degC] (:func:`sample_temperatures`), or None.
+
+    Raises:
+        IdentificationError: no temperatures, or poses whose mean temperatures differ by less
+            than :data:`MIN_SPREAD_C` (a slope cannot be told from the bias).
+    """
+    if temperature_C is None:
+        raise IdentificationError(
+            f"{samples.source}: bias_drift temperature needs each reading's sensor "
+            f"temperature: the samples have no {TEMPERATURE_CHANNEL!r} column",
+            field="bias_drift",
+        )
+    group, first = pose_groups(samples)
+    poses = len(first)
+    T_pose = np.bincount(group, temperature_C, poses) / np.bincount(group, minlength=poses)
+    spread = float(T_pose.max() - T_pose.min())
+    if not spread >= MIN_SPREAD_C:
+        raise IdentificationError(
+            f"{samples.source}: the poses' mean temperatures span {spread:.3g} degC "
+            f"({T_pose.min():.6g} .. {T_pose.max():.6g}): bias_drift temperature needs them "
+            f"to differ by {MIN_SPREAD_C:g} degC or more",
+            field="bias_drift",
+        )
+    T_min, T_max = float(temperature_C.min()), float(temperature_C.max())
+    T_ref = float(T_pose.mean())
+    half = max((T_max - T_min) / 2.0, 1e-9)
+    return TemperatureRegressor((T_pose - T_ref) / half, T_ref, T_min, T_max, half)
+
+
+def temperature_drift_from_fit(
+    fit: ExtendedFit, regressor: TemperatureRegressor
+) -> TemperatureBiasDrift:
+    """The slopes per degC a joint fit with one drift term in the scaled temperature found,
+    with standard errors."""
+    if fit.order != 1:
+        raise ParameterError(f"a temperature bias is linear: the fit's order is {fit.order}")
+    scale = 1.0 / regressor.half_span_C
+    se = np.sqrt(np.maximum(np.diag(fit.covariance)[12:18], 0.0)) * scale
+    return TemperatureBiasDrift(
+        regressor.T_ref_C,
+        regressor.T_min_C,
+        regressor.T_max_C,
+        fit.drift[0] * scale,
+        se,
+    )

@@ -25,6 +25,7 @@ from ftcomp.calibration_record import (
     Method,
     MountAxes,
     StochasticBiasDrift,
+    TemperatureBiasDrift,
 )
 from ftcomp.cli.common import add_range_argument, print_warnings
 from ftcomp.cli.still_options import add_still_arguments, print_segments, still_config
@@ -79,11 +80,14 @@ def register(parser: argparse.ArgumentParser) -> None:
         "--bias-drift",
         choices=BIAS_CHOICES,
         default="auto",
-        help="the bias model: none (constant), a polynomial in each reading's time t, or "
+        help="the bias model: none (constant), a polynomial in each reading's time t, "
         "stochastic (a smooth Matérn 3/2 wander, its size and time constant from the data, 6+ "
-        "poses), with the tool model shared; past the session the bias is held at its last "
-        "estimate; a drift needs a t column and the joint method (default: auto, stochastic "
-        "where the data support it over a constant bias, printed with the evidence)",
+        "poses), or temperature (linear in the sensor's temperature, from a temperature_C "
+        "column [degC], 4+ poses), with the tool model shared; outside the session's times or "
+        "temperatures the bias is held at its nearest estimate; a drift in time needs a t "
+        "column; every model but none, the joint method (default: auto, stochastic or "
+        "temperature where the data support it over a constant bias, printed with the "
+        "evidence)",
     )
     parser.add_argument(
         "--identify-mount",
@@ -263,6 +267,23 @@ def _render_extensions(result: Calibration, console: Console, *, unapplied_map: 
             f"held (10 min later its standard error is {np.max(std[:3]):.3g} N, "
             f"{np.max(std[3:]):.3g} N·m)"
         )
+    elif isinstance(drift, TemperatureBiasDrift):
+        table = Table(
+            title=f"Bias temperature slopes (T = {drift.T_min_C:.4g} .. {drift.T_max_C:.4g} "
+            f"degC; F0, M0 above are the bias at T = {drift.T_ref_C:.4g} degC; held at the "
+            "nearer end outside that range)"
+        )
+        table.add_column("coefficient")
+        for col in WRENCH_COLUMNS:
+            table.add_column(col, justify="right")
+        table.add_row(
+            "per degC",
+            *(
+                _pm(v, e, 1.0, 4 if j < 3 else 5)
+                for j, (v, e) in enumerate(zip(drift.slopes, drift.std_errors, strict=True))
+            ),
+        )
+        console.print(table)
     elif drift is not None:
         table = Table(
             title=f"Bias drift ({drift.name}, t = {drift.t_min_s:.6g} .. {drift.t_max_s:.6g} s; "

@@ -11,7 +11,9 @@ where the reading is zero) are ``null``. Optional, when identified: ``bias_drift
 nearer end, never extrapolated), then for ``linear``/``quadratic`` the coefficients per power of
 seconds with standard errors, for ``stochastic`` the Matérn 3/2 process: ``time_constant_s``,
 ``scale`` [6], ``white_noise`` [6], ``knots_t_s`` [P], ``weights`` [P][6], ``knot_std`` [P][6],
-``end_std`` [6]), ``sensor_map`` (``delta`` [6][3]: force rows dimensionless, torque rows in
+``end_std`` [6]; for ``temperature``, instead of times: ``T_ref_C``, ``T_range_C`` (the validity
+window, held outside it as a time range is), ``slopes_per_C`` [6] and ``std_errors`` [6]),
+``sensor_map`` (``delta`` [6][3]: force rows dimensionless, torque rows in
 metres; ``std_errors``; ``log_evidence_gain``; ``supported``; ``applied``: compensation folds
 ``delta`` in only when true) and
 ``mount`` (``axes``, ``angles_deg``, ``std_errors_deg``); files without them load as before.
@@ -37,6 +39,7 @@ from ftcomp.calibration_record import (
     SensorMap,
     StandardErrors,
     StochasticBiasDrift,
+    TemperatureBiasDrift,
     mount_matrix,
 )
 from ftcomp.errors import CalibrationFileError, ParameterError
@@ -165,7 +168,19 @@ def _sensor_map(data: Any, source: str) -> SensorMap | None:
     )
 
 
-def _drift_to_dict(drift: BiasDrift | StochasticBiasDrift) -> dict[str, object]:
+def _drift_to_dict(
+    drift: BiasDrift | StochasticBiasDrift | TemperatureBiasDrift,
+) -> dict[str, object]:
+    if isinstance(drift, TemperatureBiasDrift):
+        return {
+            "model": drift.name,
+            "T_ref_C": drift.T_ref_C,
+            "T_range_C": [drift.T_min_C, drift.T_max_C],
+            "outside_range": "held at the nearer end (never extrapolated)",
+            "columns": ["fx", "fy", "fz", "tx", "ty", "tz"],
+            "slopes_per_C": drift.slopes.tolist(),
+            "std_errors": [v if math.isfinite(v) else None for v in drift.std_errors.tolist()],
+        }
     head: dict[str, object] = {
         "model": drift.name,
         "t_ref_s": drift.t_ref_s,
@@ -494,16 +509,39 @@ def _stochastic(data: dict[str, Any], source: str) -> StochasticBiasDrift:
         raise CalibrationFileError(f"{where}: {exc}") from None
 
 
-def _drift(data: Any, source: str) -> BiasDrift | StochasticBiasDrift | None:
+def _temperature(data: dict[str, Any], source: str) -> TemperatureBiasDrift:
+    """A ``bias_drift`` entry of model ``temperature``."""
+    where = f"{source}: bias_drift"
+    span = data.get("T_range_C")
+    slopes = _optional_array(data.get("slopes_per_C"), (6,))
+    if not isinstance(span, list) or len(span) != 2 or not np.all(np.isfinite(slopes)):
+        raise CalibrationFileError(
+            f"{where}: a temperature drift needs T_range_C [2] and slopes_per_C [6], finite"
+        )
+    try:
+        return TemperatureBiasDrift(
+            T_ref_C=_number(data, "T_ref_C", where),
+            T_min_C=_number({"T": span[0]}, "T", f"{where}.T_range_C"),
+            T_max_C=_number({"T": span[1]}, "T", f"{where}.T_range_C"),
+            slopes=slopes,
+            std_errors=_optional_array(data.get("std_errors"), (6,)),
+        )
+    except ParameterError as exc:
+        raise CalibrationFileError(f"{where}: {exc}") from None
+
+
+def _drift(data: Any, source: str) -> BiasDrift | StochasticBiasDrift | TemperatureBiasDrift | None:
     """The optional ``bias_drift`` entry (absent or null: a constant bias)."""
     if data is None:
         return None
     if isinstance(data, dict) and data.get("model") == "stochastic":
         return _stochastic(data, source)
+    if isinstance(data, dict) and data.get("model") == "temperature":
+        return _temperature(data, source)
     order = DRIFT_ORDERS.get(str(data.get("model"))) if isinstance(data, dict) else None
     if not isinstance(data, dict) or not order:
         raise CalibrationFileError(
-            f"{source}: 'bias_drift.model' must be linear, quadratic or stochastic"
+            f"{source}: 'bias_drift.model' must be linear, quadratic, stochastic or temperature"
         )
     span = data.get("t_range_s")
     coefficients = _optional_array(data.get("coefficients_per_s_power"), (order, 6))

@@ -27,8 +27,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp.calibration.identify import pose_groups
 from ftcomp.calibration.methods import force_regressor
-from ftcomp.calibration_record import Calibration
+from ftcomp.calibration.temperature import sample_temperatures
+from ftcomp.calibration_record import Calibration, TemperatureBiasDrift
 from ftcomp.errors import ParameterError
 from ftcomp.io.atomic import atomic_write_text
 from ftcomp.samples import WRENCH_COLUMNS, Samples
@@ -217,12 +219,17 @@ def drift_figure(calibration: Calibration, samples: Samples | None, title: str) 
     drift = calibration.bias_drift
     if drift is None:
         raise ParameterError("the calibration has no bias drift to plot")
-    t = np.linspace(drift.t_min_s, drift.t_max_s, 200)
+    heat = isinstance(drift, TemperatureBiasDrift)
+    if isinstance(drift, TemperatureBiasDrift):  # the bias against the sensor's temperature
+        t = np.linspace(drift.T_min_C, drift.T_max_C, 200)
+        pose_t = _pose_temperatures(calibration, samples)
+    else:
+        t = np.linspace(drift.t_min_s, drift.t_max_s, 200)
+        pose_t = _pose_times(calibration, samples)
     offset = drift.offset(t)
     fig = new_figure(8.0, 5.0)
     axes = fig.subplots(2, 1, sharex=True)
     colors = ("#1f5fa8", "#e08a00", "#17702a")
-    pose_t = _pose_times(calibration, samples)
     for row, ax in enumerate(axes):
         for k in range(3):
             j = 3 * row + k
@@ -230,9 +237,10 @@ def drift_figure(calibration: Calibration, samples: Samples | None, title: str) 
             if pose_t is not None:
                 points = drift.offset(pose_t)[:, j] + calibration.residuals[:, j]
                 ax.plot(pose_t, points, "o", color=colors[k], ms=4)
-        ax.set_ylabel(f"bias − bias(t_ref) [{'N' if row == 0 else 'N·m'}]")
+        ref = "T_ref" if heat else "t_ref"
+        ax.set_ylabel(f"bias − bias({ref}) [{'N' if row == 0 else 'N·m'}]")
         ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
-    axes[1].set_xlabel("t [s]")
+    axes[1].set_xlabel("sensor temperature [°C]" if heat else "t [s]")
     fig.suptitle(title, fontsize=10)
     return fig
 
@@ -249,6 +257,20 @@ def _pose_times(calibration: Calibration, samples: Samples | None) -> NDArray[np
             return None
         out.append(float(np.mean(samples.t[mask])))
     return np.array(out)
+
+
+def _pose_temperatures(
+    calibration: Calibration, samples: Samples | None
+) -> NDArray[np.float64] | None:
+    """Each pose's mean sensor temperature [degC] (None without the samples' temperatures or
+    when their poses are not the calibration's)."""
+    temperature = sample_temperatures(samples) if samples is not None else None
+    if samples is None or temperature is None:
+        return None
+    group, first = pose_groups(samples)
+    if len(first) != len(calibration.pose_ids):
+        return None
+    return np.bincount(group, temperature) / np.bincount(group)
 
 
 # ------------------------------------------------------------------------------------ tables
@@ -284,7 +306,12 @@ def parameter_table(calibration: Calibration) -> Table:
         ["base tilt V", "deg", _pm(math.degrees(m.tilt_V_rad), math.degrees(se.tilt_V_rad), 4)]
     )
     drift = calibration.bias_drift
-    if drift is not None:
+    if isinstance(drift, TemperatureBiasDrift):
+        for j, name in enumerate(WRENCH_COLUMNS):
+            unit = ("N" if j < 3 else "N·m") + "/°C"
+            c, s = drift.slopes[j], drift.std_errors[j]
+            rows.append([f"temperature slope {name}", unit, f"{c:.3e} ± {s:.1e}"])
+    elif drift is not None:
         for order in range(drift.order):
             unit_t = "s" if order == 0 else "s²"
             for j, name in enumerate(WRENCH_COLUMNS):
@@ -298,7 +325,9 @@ def parameter_table(calibration: Calibration) -> Table:
             what = "rotation vector " if mount.axes == "full" else ""
             rows.append([f"mount {what}{name}", "deg", _pm(math.degrees(a), math.degrees(s), 3)])
     note = "± one standard error"
-    if drift is not None:
+    if isinstance(drift, TemperatureBiasDrift):
+        note += f"; F0, M0 are the bias at T_ref = {drift.T_ref_C:.4g} °C"
+    elif drift is not None:
         note += f"; F0, M0 are the bias at t_ref = {drift.t_ref_s:.6g} s"
     return Table("Identified parameters", ["parameter", "unit", "value"], rows, note=note)
 
@@ -436,7 +465,28 @@ def calibration_report(
             anchor="residuals",
         ),
     ]
-    if calibration.bias_drift is not None:
+    if isinstance(calibration.bias_drift, TemperatureBiasDrift):
+        heat = calibration.bias_drift
+        sections.append(
+            Section(
+                "Bias and temperature",
+                paragraphs=[
+                    "The bias was fitted as a linear function of the sensor's temperature over "
+                    f"{heat.T_min_C:.4g} .. {heat.T_max_C:.4g} °C (held at the nearer end "
+                    "outside it)."
+                ],
+                figures=[
+                    Figure(
+                        _png(drift_figure(calibration, samples, "Bias against temperature")),
+                        "Bias against temperature",
+                        "Lines: the fitted bias minus the bias at T_ref; dots: per pose, the "
+                        "fitted bias at its mean temperature plus its residual.",
+                    )
+                ],
+                anchor="drift",
+            )
+        )
+    elif calibration.bias_drift is not None:
         drift = calibration.bias_drift
         sections.append(
             Section(
