@@ -62,9 +62,11 @@ def add_range_argument(parser: argparse.ArgumentParser) -> None:
 
 
 def warn_live_drift(calibration: Calibration, path: str, *, tracking: bool = False) -> None:
-    """Say so when a calibration's bias drift will not be applied by a live loop (and, unless
-    ``tracking`` (``--track-bias``) follows the bias from there, how to follow it)."""
-    if calibration.bias_drift is not None:
+    """Say so when a calibration's bias drift in time will not be applied by a live loop (and,
+    unless ``tracking`` (``--track-bias``) follows the bias from there, how to follow it); a
+    bias that follows the temperature is applied live from each reading's."""
+    drift = calibration.bias_drift
+    if drift is not None and drift.name != "temperature":
         then = (
             "--track-bias follows the bias from there"
             if tracking

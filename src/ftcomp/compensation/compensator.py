@@ -8,10 +8,18 @@ once, and one sample costs two small matrix products.
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ftcomp.calibration_record import AnyBiasDrift, Calibration, MountRotation
+from ftcomp.calibration_record import (
+    AnyBiasDrift,
+    Calibration,
+    MountRotation,
+    TemperatureBiasDrift,
+    TimeBiasDrift,
+)
 from ftcomp.errors import ParameterError
 from ftcomp.model import GravityModel, skew
 
@@ -31,7 +39,11 @@ class GravityCompensator:
     with a bias drift applies it when given each sample's time (``t_s``, on the recording's
     clock): a polynomial or the smoothed stochastic bias inside the calibration's time
     range, the bias at its nearer end outside it (never extrapolated); without times the
-    bias is the model's, the bias at the end of the calibration.
+    bias is the model's, the bias at the end of the calibration. One whose bias follows the
+    sensor's temperature (``--bias-drift temperature``) applies it from each reading's
+    temperature (``temperature_C``), held at the calibrated range's nearer end outside it;
+    it needs that temperature for every reading (:attr:`needs_temperature`): without it
+    :meth:`compensate` raises rather than silently use a constant bias.
     """
 
     def __init__(self, calibration: Calibration | GravityModel) -> None:
@@ -46,6 +58,14 @@ class GravityCompensator:
         self.mount: MountRotation | None = mount
         #: The calibration's bias drift (None: constant bias).
         self.bias_drift: AnyBiasDrift | None = drift
+        #: The drift applied by each reading's time (None: none in time).
+        self.time_drift: TimeBiasDrift | None = (
+            None if isinstance(drift, TemperatureBiasDrift) else drift
+        )
+        #: The bias's dependence on the sensor's temperature (None: none).
+        self.temperature_drift: TemperatureBiasDrift | None = (
+            drift if isinstance(drift, TemperatureBiasDrift) else None
+        )
         self._gravity_base = model.gravity_base_N.copy()
         self._bias = np.concatenate([model.force_bias_N, model.torque_bias_Nm])
         # [F; M] of the tool gravity = A @ g_s with A = [I; skew(P)] (Eq. 12, 20); with a mount,
@@ -67,10 +87,20 @@ class GravityCompensator:
         self._rows = tuple(
             (b, *a) for b, a in zip(self._bias.tolist(), self._A.tolist(), strict=True)
         )
+        heat = self.temperature_drift
+        # The temperature model on floats: slopes, reference and range.
+        self._slopes = tuple(heat.slopes.tolist()) if heat is not None else (0.0,) * 6
+        self._T = (heat.T_ref_C, heat.T_min_C, heat.T_max_C) if heat is not None else None
         #: Unit vector along gravity, base frame (None for a weightless tool).
         self.gravity_dir_base = (
             self._gravity_base / np.linalg.norm(self._gravity_base) if model.weight_N else None
         )
+
+    @property
+    def needs_temperature(self) -> bool:
+        """Whether :meth:`compensate` needs each reading's sensor temperature: the
+        calibration's bias follows it."""
+        return self._T is not None
 
     def compensate(
         self,
@@ -79,6 +109,7 @@ class GravityCompensator:
         *,
         out: NDArray[np.float64] | None = None,
         t_s: ArrayLike | None = None,
+        temperature_C: ArrayLike | None = None,
     ) -> NDArray[np.float64]:
         """Contact wrench ``[F'; M']`` (Eq. 22) [N, N*m], sensor frame.
 
@@ -88,17 +119,34 @@ class GravityCompensator:
             out: for a batch, an optional C-contiguous float64 (N, 6) array to write into
                 (saves allocating a fresh result when streaming blocks of readings).
             t_s: each sample's time [s], scalar or (N,): applies the calibration's bias drift
-                (ignored without one).
+                in time (ignored without one).
+            temperature_C: each sample's sensor temperature [degC], scalar or (N,): applies a
+                bias that follows it (needed with one; ignored without). A NaN temperature
+                gives a NaN wrench.
 
         Returns:
             Shape (6,) or (N, 6).
+
+        Raises:
+            ParameterError: shapes that do not fit; no ``temperature_C`` for a calibration
+                whose bias follows the temperature.
         """
         w = np.asarray(wrench_sensor, dtype=float)
         R = np.asarray(R_base_sensor, dtype=float)
+        T = self._T
+        if T is not None and temperature_C is None:
+            raise ParameterError(
+                "the calibration's bias follows the sensor's temperature (bias_drift "
+                "temperature): compensate needs each reading's temperature_C"
+            )
         if w.shape == (6,) and R.shape == (3, 3):
-            if t_s is not None and self.bias_drift is not None:
-                w = w - self.bias_drift.offset(t_s)
-            return self._one(w, R)
+            if t_s is not None and self.time_drift is not None:
+                w = w - self.time_drift.offset(t_s)
+            if T is None:
+                return self._one(w, R, 0.0)
+            ref, low, high = T
+            now = float(cast(float, temperature_C))
+            return self._one(w, R, min(max(now, low), high) - ref)
         if w.ndim == 2 and w.shape[1] == 6 and R.shape == (len(w), 3, 3):
             if out is None:
                 out = np.empty((len(w), 6))
@@ -108,16 +156,22 @@ class GravityCompensator:
             np.dot(np.ascontiguousarray(R).reshape(len(R), 9), self._batch_matrix, out=out)
             np.subtract(w, out, out=out)
             out -= self._bias
-            if t_s is not None and self.bias_drift is not None:
-                out -= self.bias_drift.offset(np.broadcast_to(np.asarray(t_s, float), len(w)))
+            if t_s is not None and self.time_drift is not None:
+                out -= self.time_drift.offset(np.broadcast_to(np.asarray(t_s, float), len(w)))
+            if self.temperature_drift is not None:
+                heat = np.broadcast_to(np.asarray(temperature_C, float), len(w))
+                out -= self.temperature_drift.offset(heat)
             return out
         raise ParameterError(
             "compensate needs wrench_sensor (6,) with R_base_sensor (3, 3), or (N, 6) with "
             f"(N, 3, 3); got {w.shape} and {R.shape}"
         )
 
-    def _one(self, w: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``w - bias - A @ (g @ R)`` for one sample, on floats."""
+    def _one(
+        self, w: NDArray[np.float64], R: NDArray[np.float64], dT: float
+    ) -> NDArray[np.float64]:
+        """``w - bias - slopes dT - A @ (g @ R)`` for one sample, on floats (``dT``: the
+        temperature held to the calibrated range less the reference [degC], 0 without one)."""
         g0, g1, g2 = self._g
         (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = R.tolist()
         s0, s1, s2 = (
@@ -127,7 +181,7 @@ class GravityCompensator:
         )
         return np.array(
             [
-                x - b - (k0 * s0 + k1 * s1 + k2 * s2)
-                for x, (b, k0, k1, k2) in zip(w.tolist(), self._rows, strict=True)
+                x - b - k * dT - (k0 * s0 + k1 * s1 + k2 * s2)
+                for x, k, (b, k0, k1, k2) in zip(w.tolist(), self._slopes, self._rows, strict=True)
             ]
         )

@@ -274,14 +274,17 @@ class OnlineLoadCompensator(GravityCompensator):
         *,
         out: NDArray[np.float64] | None = None,
         t_s: ArrayLike | None = None,
+        temperature_C: ArrayLike | None = None,
     ) -> NDArray[np.float64]:
         """Contact wrench with tool and (once converged) load removed [N, N*m], sensor frame.
 
         One sample, shape (6,) with (3, 3): advances the detector and estimator. A batch,
-        (N, 6) with (N, 3, 3): compensates with the current state only. ``out`` and ``t_s``
-        as in :meth:`GravityCompensator.compensate`.
+        (N, 6) with (N, 3, 3): compensates with the current state only. ``out``, ``t_s`` and
+        ``temperature_C`` as in :meth:`GravityCompensator.compensate`.
         """
-        tool_only = super().compensate(wrench_sensor, R_base_sensor, out=out, t_s=t_s)
+        tool_only = super().compensate(
+            wrench_sensor, R_base_sensor, out=out, t_s=t_s, temperature_C=temperature_C
+        )
         R = np.asarray(R_base_sensor, dtype=float)
         if self._R_rec_sensor is not None:
             R = R @ self._R_rec_sensor

@@ -5,7 +5,8 @@ A live loop turns a raw reading into the contact wrench in one place,
 ``stream`` and ``record`` read what it computed and compensate nothing themselves. In order:
 
 1. bias and tool gravity of the calibration (:class:`~ftcomp.compensation.compensator.
-   GravityCompensator`), or with a grasped load weighed online that load's too
+   GravityCompensator`; a bias that follows the sensor's temperature from each reading's
+   ``temperature_C`` channel), or with a grasped load weighed online that load's too
    (:class:`~ftcomp.compensation.online.OnlineLoadCompensator`, stateful: one call per reading,
    in time order; its load columns and events followed by a
    :class:`~ftcomp.compensation.online.LoadTracker`);
@@ -36,6 +37,7 @@ from ftcomp.compensation.bias_tracking import BiasTracker
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.compensation.online import LoadTracker, OnlineLoadCompensator, OnlineSettings
 from ftcomp.errors import ParameterError
+from ftcomp.hardware.protocols import TEMPERATURE_CHANNEL
 from ftcomp.model import GravityModel
 
 __all__ = ["MEASURE_RATE_S", "MIN_RATE_READINGS", "Compensated", "WrenchPipeline"]
@@ -82,6 +84,13 @@ class WrenchPipeline:
             :class:`~ftcomp.compensation.online.OnlineLoadCompensator`: a grasped load weighed
             online too); None passes the raw reading on (the paper's uncompensated comparison).
         bias_tracker: follows the bias while the arm is still and free, after the compensator.
+        extra_channels: the sensor's extra channels, in the order of each reading's
+            ``extras`` (:attr:`~ftcomp.hardware.protocols.ReportsExtraChannels.extra_channels`):
+            a calibration whose bias follows the temperature takes ``temperature_C`` from them.
+
+    Raises:
+        ParameterError: a bias tracker without a compensator; a calibration whose bias follows
+            the sensor's temperature with a sensor that reports none.
 
     Attributes:
         load: follows the online compensator's estimate and events (None without one).
@@ -94,9 +103,13 @@ class WrenchPipeline:
         compensator: GravityCompensator | None = None,
         *,
         bias_tracker: BiasTracker | None = None,
+        extra_channels: tuple[str, ...] = (),
     ) -> None:
         if bias_tracker is not None and compensator is None:
             raise ParameterError("tracking the bias needs the tool's calibration")
+        self.extra_channels = extra_channels
+        #: Where each reading's temperature is in its extras (None: not used).
+        self._temperature_at = _temperature_index(compensator, extra_channels)
         self.compensator = compensator
         self.bias_tracker = bias_tracker
         self.load = (
@@ -118,6 +131,7 @@ class WrenchPipeline:
         *,
         settings: OnlineSettings | None = None,
         measure_s: float = MEASURE_RATE_S,
+        extra_channels: tuple[str, ...] = (),
     ) -> WrenchPipeline:
         """A pipeline weighing a grasped load online (no bias tracking).
 
@@ -129,17 +143,23 @@ class WrenchPipeline:
             settings: the compensator's tuning; its ``rate_Hz`` is replaced by the rate
                 (default :class:`~ftcomp.compensation.online.OnlineSettings`).
             measure_s: how long to measure the rate [s].
+            extra_channels: the sensor's extra channels (as :class:`WrenchPipeline`'s).
 
         Raises:
-            ParameterError: a weightless tool, or a rate that is not > 0.
+            ParameterError: a weightless tool, a rate that is not > 0, or a calibration whose
+                bias follows the temperature with a sensor that reports none.
         """
         if rate_Hz is not None and not (math.isfinite(rate_Hz) and rate_Hz > 0.0):
             raise ParameterError(f"the readings' rate must be > 0 Hz, got {rate_Hz:g}")
         settings = settings if settings is not None else OnlineSettings()
         if rate_Hz is not None:
-            return cls(OnlineLoadCompensator(calibration, replace(settings, rate_Hz=rate_Hz)))
-        OnlineLoadCompensator(calibration, settings)  # refuses a weightless tool now
-        pipeline = cls()
+            return cls(
+                OnlineLoadCompensator(calibration, replace(settings, rate_Hz=rate_Hz)),
+                extra_channels=extra_channels,
+            )
+        # refuses a weightless tool, or a temperature model without a temperature, now
+        _temperature_index(OnlineLoadCompensator(calibration, settings), extra_channels)
+        pipeline = cls(extra_channels=extra_channels)
         pipeline._weigh = (calibration, settings, round(measure_s * 1e9))
         return pipeline
 
@@ -155,16 +175,25 @@ class WrenchPipeline:
         return self._weigh is not None
 
     def contact(
-        self, t_ns: int, wrench_sensor: NDArray[np.float64], R_base_sensor: NDArray[np.float64]
+        self,
+        t_ns: int,
+        wrench_sensor: NDArray[np.float64],
+        R_base_sensor: NDArray[np.float64],
+        extras: tuple[float, ...] = (),
     ) -> NDArray[np.float64]:
         """One reading's contact wrench [N, N*m], sensor frame, (6,): the reading (stamp [ns],
-        raw wrench, the sensor's orientation) through the compensator, then the bias tracker.
-        Call it once per reading, in time order (the online estimate and the tracker keep
-        state); a pipeline still measuring its rate has no compensator yet."""
+        raw wrench, the sensor's orientation, its extra channels) through the compensator, then
+        the bias tracker. Call it once per reading, in time order (the online estimate and the
+        tracker keep state); a pipeline still measuring its rate has no compensator yet."""
         if self._weigh is not None:
             raise ParameterError("the online load estimate's rate is still being measured")
-        c = self.compensator
-        contact = wrench_sensor if c is None else c.compensate(wrench_sensor, R_base_sensor)
+        c, at = self.compensator, self._temperature_at
+        if c is None:
+            contact = wrench_sensor
+        elif at is None:
+            contact = c.compensate(wrench_sensor, R_base_sensor)
+        else:  # the bias at this reading's temperature
+            contact = c.compensate(wrench_sensor, R_base_sensor, temperature_C=extras[at])
         tracker = self.bias_tracker
         if tracker is not None:  # the bias followed while still and free
             contact = tracker.correct(t_ns * 1e-9, contact, R_base_sensor)
@@ -205,7 +234,7 @@ class WrenchPipeline:
         p_base_sensor: NDArray[np.float64],
         extras: tuple[float, ...],
     ) -> None:
-        contact = self.contact(t_ns, wrench_sensor, R_base_sensor)
+        contact = self.contact(t_ns, wrench_sensor, R_base_sensor, extras)
         tracker, load = self.bias_tracker, self.load
         self.ready.append(
             Compensated(
@@ -232,8 +261,27 @@ class WrenchPipeline:
             rate, source = settings.rate_Hz, "too few readings to measure: the default"
         compensator = OnlineLoadCompensator(calibration, replace(settings, rate_Hz=rate))
         self.compensator, self.load = compensator, LoadTracker(compensator)
+        self._temperature_at = _temperature_index(compensator, self.extra_channels)
         self.rate_source = source
         self._weigh = None
         held, self._held = self._held, []
         for reading in held:
             self._push(*reading)
+
+
+def _temperature_index(
+    compensator: GravityCompensator | None, extra_channels: tuple[str, ...]
+) -> int | None:
+    """Where a reading's temperature is among its extras when the compensator needs it, else
+    None; a compensator that needs it with a sensor that reports none is a ParameterError."""
+    if compensator is None or not compensator.needs_temperature:
+        return None
+    if TEMPERATURE_CHANNEL not in extra_channels:
+        reported = ", ".join(extra_channels) if extra_channels else "none"
+        raise ParameterError(
+            "the calibration's bias follows the sensor's temperature (bias_drift temperature), "
+            f"but the sensor reports no {TEMPERATURE_CHANNEL} (its extra channels: "
+            f"{reported}); use a sensor that reports its temperature, or a calibration "
+            "without the temperature model"
+        )
+    return extra_channels.index(TEMPERATURE_CHANNEL)

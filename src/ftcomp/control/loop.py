@@ -37,7 +37,13 @@ from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.compensation.pipeline import Compensated, WrenchPipeline
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.pacing import LoopClock, TimingSummary, on_host_clock
-from ftcomp.hardware.protocols import Mount, ReportsLateness, Robot, WrenchSensor
+from ftcomp.hardware.protocols import (
+    Mount,
+    ReportsExtraChannels,
+    ReportsLateness,
+    Robot,
+    WrenchSensor,
+)
 
 __all__ = ["ControlCycle", "LoopStats", "Reading", "loop_clock", "run_loop"]
 
@@ -118,10 +124,11 @@ class ControlCycle:
         self.robot = robot
         self.sensor = sensor
         self.mount = mount if mount is not None else Mount()
+        channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
         self.pipeline = (
             pipeline
             if pipeline is not None
-            else WrenchPipeline(compensator, bias_tracker=bias_tracker)
+            else WrenchPipeline(compensator, bias_tracker=bias_tracker, extra_channels=channels)
         )
         self.every_reading = every_reading
         self.period_s = robot.control_period_s
@@ -136,7 +143,7 @@ class ControlCycle:
         pose = self.robot.pose()
         p, R = self.mount.sensor_pose(pose.p_base_tcp, pose.R_base_tcp)
         w = sample.wrench_sensor
-        contact = self.pipeline.contact(sample.t_ns, w, R)
+        contact = self.pipeline.contact(sample.t_ns, w, R, sample.extras)
         return Reading(sample.t_ns, pose.t_ns, w, contact, p, R, pose.R_base_tcp, (), sample.extras)
 
     def _read_every(self) -> Reading:

@@ -27,10 +27,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.arrays import freeze_field
-from ftcomp.calibration_record import Calibration
+from ftcomp.calibration_record import Calibration, TemperatureBiasDrift
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.config_fields import check_fields, param
-from ftcomp.errors import ParameterError
+from ftcomp.errors import InputFileError, ParameterError
+from ftcomp.hardware.protocols import TEMPERATURE_CHANNEL
 from ftcomp.io.atomic import atomic_output, check_writable
 from ftcomp.io.calibration_json import load_calibration
 from ftcomp.io.numtext import format_rows
@@ -93,6 +94,8 @@ class CompensateResult:
         contact_wrench_mean_sensor: mean contact wrench [N, N*m], sensor frame, (6,).
         t_range_s: first and last time stamp [s] when the calibration's bias drift was applied
             from them; None otherwise.
+        temperature_range_C: the lowest and highest temperature [degC] when the calibration's
+            bias was applied from the rows' ``temperature_C``; None otherwise.
         warnings: things that look wrong but were accepted (the input's, and rows beyond
             the bias drift's calibrated time range, where it is held, not extrapolated).
     """
@@ -105,6 +108,7 @@ class CompensateResult:
     contact_wrench_mean_sensor: NDArray[np.float64] = field(repr=False)
     t_range_s: tuple[float, float] | None = None
     warnings: tuple[str, ...] = ()
+    temperature_range_C: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         if not (isinstance(self.rows, int) and self.rows >= 0):
@@ -124,6 +128,8 @@ class _Totals:
     contact_sum: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
     t_min: float = np.inf
     t_max: float = -np.inf
+    T_min: float = np.inf
+    T_max: float = -np.inf
 
     def add(self, contact: NDArray[np.float64], weight: NDArray[np.float64]) -> None:
         self.rows += len(weight)
@@ -133,19 +139,54 @@ class _Totals:
 
 
 def _extra(
-    block: SampleBlock, compensator: GravityCompensator, totals: _Totals
+    block: SampleBlock, compensator: GravityCompensator, totals: _Totals, source: str
 ) -> NDArray[np.float64]:
     """The block's contact wrench and load weight, shape (N, 7)."""
     extra = np.empty((len(block), 7))
-    t_s = block.t if compensator.bias_drift is not None else None
+    t_s = block.t if compensator.time_drift is not None else None
     if t_s is not None and len(t_s):
         totals.t_min = min(totals.t_min, float(t_s.min()))
         totals.t_max = max(totals.t_max, float(t_s.max()))
-    contact = compensator.compensate(block.wrench_sensor, block.R_base_sensor, t_s=t_s)
+    temperature = _temperatures(block, source) if compensator.needs_temperature else None
+    if temperature is not None and len(temperature):
+        totals.T_min = min(totals.T_min, float(temperature.min()))
+        totals.T_max = max(totals.T_max, float(temperature.max()))
+    contact = compensator.compensate(
+        block.wrench_sensor, block.R_base_sensor, t_s=t_s, temperature_C=temperature
+    )
     extra[:, :6] = contact
     np.sqrt(np.einsum("ij,ij->i", contact[:, :3], contact[:, :3]), out=extra[:, 6])
     totals.add(contact, extra[:, 6])
     return extra
+
+
+def _temperatures(block: SampleBlock, source: str) -> NDArray[np.float64]:
+    """The block's ``temperature_C`` column [degC], (N,), each a finite number (else an
+    InputFileError naming the row)."""
+    import pyarrow as pa
+
+    column = block.table.column(TEMPERATURE_CHANNEL)
+    try:
+        values = np.asarray(column.cast(pa.float64()).to_numpy(zero_copy_only=False), float)
+    except (pa.ArrowException, ValueError):
+        values = np.array([_number(cell) for cell in column.to_pylist()])
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        k = int(bad[0])
+        raise InputFileError(
+            f"{source}, row {block.first_row + k}, column {TEMPERATURE_CHANNEL!r}: "
+            f"{column[k].as_py()!r} is not a finite temperature [degC] (the calibration's "
+            "bias follows the sensor's temperature)"
+        )
+    return values
+
+
+def _number(cell: object) -> float:
+    """A cell as a float, NaN when it is not a number."""
+    try:
+        return float(cell)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return math.nan
 
 
 def _csv_block(handle: BinaryIO, block: SampleBlock, extra: NDArray[np.float64]) -> None:
@@ -197,7 +238,7 @@ def _write(
 
             with ParquetBlockWriter(handle) as writer:
                 for block in read_ahead(reader.blocks()):
-                    extra = _extra(block, compensator, totals)
+                    extra = _extra(block, compensator, totals, reader.source)
                     table = block.table
                     for j, name in enumerate(EXTRA_COLUMNS):
                         table = table.append_column(name, pa.array(extra[:, j]))
@@ -210,16 +251,17 @@ def _write(
             )
             handle.write(header.getvalue().encode("utf-8"))
             for block in read_ahead(reader.blocks()):
-                _csv_block(handle, block, _extra(block, compensator, totals))
+                _csv_block(handle, block, _extra(block, compensator, totals, reader.source))
                 progress(block.byte_range[1] if block.byte_range else totals.rows)
     return totals
 
 
 def _open(
-    path: Path, config: CompensateConfig, *, to_parquet: bool
+    path: Path, config: CompensateConfig, *, to_parquet: bool, columns: bool = False
 ) -> SampleCsvReader | ParquetSampleReader:
     """A block reader for ``path`` (Parquet by its extension, else CSV), keeping what the
-    output needs: the rows' text for a CSV output, their columns for a Parquet one."""
+    output needs: the rows' text for a CSV output, their columns for a Parquet one (and with
+    ``columns`` for either: a column beyond the sample's, the temperature, is read)."""
     open_reader: Callable[..., SampleCsvReader | ParquetSampleReader]
     if path.suffix.lower() == ".parquet":
         from ftcomp.io.parquet import ParquetSampleReader
@@ -232,7 +274,7 @@ def _open(
         force_range_N=config.force_range_N,
         torque_range_Nm=config.torque_range_Nm,
         with_text=not to_parquet,
-        with_table=to_parquet,
+        with_table=to_parquet or columns,
     )
 
 
@@ -258,7 +300,8 @@ def compensate_file(
     Args:
         samples: a sample CSV, or Parquet when the name ends in ``.parquet``: fx..tz [N, N*m] in
             the sensor frame and one orientation encoding (docs/files.md); a ``t`` column when
-            the calibration has a bias drift.
+            the calibration has a bias drift in time, a ``temperature_C`` column [degC] when
+            its bias follows the sensor's temperature.
         output: CSV, or Parquet by its extension: the input columns plus
             :data:`EXTRA_COLUMNS` (contact wrench [N, N*m], sensor frame, and load weight [N]).
             Never ``samples``, nor the calibration file.
@@ -275,7 +318,7 @@ def compensate_file(
     Raises:
         ParameterError: the output is an input, exists without ``config.overwrite`` or cannot
             be written; the input already has a compensated column; the calibration's bias
-            drift needs a time column the input lacks.
+            drift needs a time (or temperature) column the input lacks.
         InputFileError, CalibrationFileError: naming the file (and row, column) at fault.
     """
     config = config if config is not None else CompensateConfig()
@@ -292,14 +335,21 @@ def compensate_file(
     if not isinstance(calibration, Calibration):
         calibration = load_calibration(calibration)
     to_parquet = out.suffix.lower() == ".parquet"
-    with _open(source, config, to_parquet=to_parquet) as reader:
+    drift = calibration.bias_drift
+    heat = isinstance(drift, TemperatureBiasDrift)
+    with _open(source, config, to_parquet=to_parquet, columns=heat) as reader:
         clash = [c for c in EXTRA_COLUMNS if c in reader.layout.header]
         if clash:
             raise ParameterError(
                 f"{reader.source}: already has column {clash[0]!r}; compensate raw readings only"
             )
-        drift = calibration.bias_drift
-        if drift is not None and not reader.layout.has_t:
+        if heat and TEMPERATURE_CHANNEL not in reader.layout.header:
+            raise ParameterError(
+                f"{reader.source}: the calibration's bias follows the sensor's temperature "
+                f"(bias_drift temperature), applied from each row's temperature: the file has "
+                f"no {TEMPERATURE_CHANNEL!r} column"
+            )
+        if drift is not None and not heat and not reader.layout.has_t:
             raise ParameterError(
                 f"{reader.source}: the calibration has a {drift.name} bias drift, applied from "
                 "each row's time: the file has no 't' (or 't_ns') column"
@@ -312,8 +362,15 @@ def compensate_file(
 
         totals = _write(reader, GravityCompensator(calibration), out, to_parquet, done)
     warnings = list(reader.warnings)
-    t_range = (totals.t_min, totals.t_max) if drift is not None and totals.rows else None
-    outside = drift.outside(totals.t_min, totals.t_max) if drift is not None else None
+    t_range = (
+        (totals.t_min, totals.t_max) if drift is not None and not heat and totals.rows else None
+    )
+    T_range = (totals.T_min, totals.T_max) if heat and totals.rows else None
+    outside = None
+    if isinstance(drift, TemperatureBiasDrift):
+        outside = drift.outside(totals.T_min, totals.T_max) if totals.rows else None
+    elif drift is not None:
+        outside = drift.outside(totals.t_min, totals.t_max)
     if outside is not None:
         warnings.append(outside)
     rows = totals.rows
@@ -326,4 +383,5 @@ def compensate_file(
         contact_wrench_mean_sensor=totals.contact_sum / rows if rows else np.full(6, np.nan),
         t_range_s=t_range,
         warnings=tuple(warnings),
+        temperature_range_C=T_range,
     )

@@ -465,27 +465,32 @@ def run_compliant(
         and the log kept (``outcome`` and ``message`` say what happened).
 
     Raises:
-        ParameterError: a calibration the online load estimate cannot use.
+        ParameterError: a calibration the online load estimate cannot use; one whose bias
+            follows the sensor's temperature with a sensor that reports none.
     """
     if config.online_load:
         require_tool_weight(calibration, source)
+    period_s = robot.control_period_s
+    tracker = BiasTracker(config.track_bias) if config.track_bias is not None else None
+    # the sensor's extra channels: a bias that follows the temperature reads it from them
+    # (a sensor without them is refused here, before the robot is taken)
+    channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
+    pipeline = (  # weighing: one call per cycle
+        WrenchPipeline.weighing(calibration, 1.0 / period_s, extra_channels=channels)
+        if config.online_load
+        else WrenchPipeline(
+            GravityCompensator(calibration), bias_tracker=tracker, extra_channels=channels
+        )
+    )
     if isinstance(robot, TakesControl) and not config.dry_run:
         robot.connect_control()  # before the loop: it takes a while (a UR uploads its script)
-    period_s = robot.control_period_s
     controller = config.admittance.controller(period_s, sensor_rate_hz(sensor))
     wrench_filter = controller.wrench_filter
-    tracker = BiasTracker(config.track_bias) if config.track_bias is not None else None
-    pipeline = (
-        WrenchPipeline.weighing(calibration, 1.0 / period_s)  # one call per cycle
-        if config.online_load
-        else WrenchPipeline(GravityCompensator(calibration), bias_tracker=tracker)
-    )
     load = pipeline.load
     cycle = ControlCycle(robot, sensor, mount=mount, pipeline=pipeline)
     columns = (*RUN_COLUMNS, *LOAD_COLUMNS) if load is not None else RUN_COLUMNS
     if tracker is not None:
         columns = (*columns, "bias_updated")
-    channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
     columns = (*columns, *channels)
     summary = _Summary(config.final_error_window_s)
     outcome, message = Outcome.DURATION, ""

@@ -337,8 +337,9 @@ def stream(
             online load's, the end and why), on a worker thread (an MCAP log, a live view).
 
     Raises:
-        ParameterError: compensation or a pose asked of a robot that reports none, or an online
-            load estimate with a weightless tool.
+        ParameterError: compensation or a pose asked of a robot that reports none, an online
+            load estimate with a weightless tool, or a calibration whose bias follows the
+            sensor's temperature with a sensor that reports none.
     """
     knows_pose = robot.pose_known
     if calibration is not None and not knows_pose:
@@ -351,13 +352,16 @@ def stream(
     if config.track_bias is not None and calibration is None:
         raise ParameterError("tracking the bias needs the tool's calibration")
     tracker = BiasTracker(config.track_bias) if config.track_bias is not None else None
+    # the sensor's extra channels: a bias that follows the temperature reads it from them
+    channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
     if config.online_load and calibration is not None:
-        pipeline = WrenchPipeline.weighing(calibration, config.online_rate_hz)
+        pipeline = WrenchPipeline.weighing(
+            calibration, config.online_rate_hz, extra_channels=channels
+        )
     else:
         compensator = GravityCompensator(calibration) if calibration is not None else None
-        pipeline = WrenchPipeline(compensator, bias_tracker=tracker)
+        pipeline = WrenchPipeline(compensator, bias_tracker=tracker, extra_channels=channels)
     online = config.online_load
-    channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
     columns = stream_columns(
         with_pose=with_pose,
         compensated=calibration is not None,
