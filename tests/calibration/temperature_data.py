@@ -39,13 +39,15 @@ def recording(
     """Readings at ``poses`` random orientations, 5 s apart, ``readings`` each (10 ms apart).
 
     The sensor's temperature jumps from pose to pose (a fan switching, a motor heating the
-    wrist), uniform in ``low_C .. high_C`` and read to 0.01 degC: a bias that follows it does
-    not follow time, so a drift in time cannot stand in for it. ``follows``: the bias moves
-    with the temperature by :data:`SLOPES` (else it is constant and the temperature a bystander).
+    wrist): evenly spread over ``low_C .. high_C`` in a random order, read to 0.01 degC. A bias
+    that follows it does not follow time, so a drift in time cannot stand in for it; the
+    extremes are visited, so held-out readings between them lie inside the calibrated range.
+    ``follows``: the bias moves with the temperature by :data:`SLOPES` (else it is constant and
+    the temperature a bystander).
     """
     rng = np.random.default_rng(seed)
     R_pose = Rotation.random(poses, random_state=rng).as_matrix()
-    T_pose = rng.uniform(low_C, high_C, poses)
+    T_pose = rng.permutation(np.linspace(low_C, high_C, poses))
     R = np.repeat(R_pose, readings, axis=0)
     T_true = np.repeat(T_pose, readings)
     t = (5.0 * np.arange(poses)[:, None] + 0.01 * np.arange(readings)[None]).ravel()

@@ -48,7 +48,7 @@ def test_auto_picks_temperature_where_the_bias_follows_it_and_compensates_to_the
     # floor; 16 poses of 20 readings leave the model's own error at about sqrt(1 + 9/48) of it
     # (9 force parameters from 48 numbers), so 1.5x is a margin of a few standard errors of an
     # RMS over 24 x 3 numbers; a constant bias is 10x and more (6 degC at 0.05-0.12 N/degC).
-    held_out = recording(2, poses=24)
+    held_out = recording(2, poses=24, low_C=22.5, high_C=27.5)
     assert _held_out_force_rms(calibration, held_out) < 1.5 * floor_N()
     constant, _ = identify(recording(1), ModelSpec(bias_drift="none"))
     assert _held_out_force_rms(constant, held_out) > 10.0 * floor_N()

@@ -69,7 +69,7 @@ def test_compensate_applies_it_to_held_out_readings_down_to_the_noise_floor(
     calibrated, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     cal, _ = calibrated
-    held_out = _write(tmp_path / "held_out.csv", recording(2, poses=24))
+    held_out = _write(tmp_path / "held_out.csv", recording(2, poses=24, low_C=22.5, high_C=27.5))
     out = tmp_path / "out.csv"
     assert main(["compensate", str(held_out), "-c", str(cal), "-o", str(out)]) == 0
     with out.open() as f:
