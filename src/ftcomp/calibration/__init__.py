@@ -14,7 +14,8 @@ them, :mod:`ftcomp.compensation` applies them.
 - :mod:`.dynamic`: the tool's inertia tensor from a fast excitation trajectory.
 - :mod:`.stochastic`: the bias as a stochastic process in time (``--bias-drift stochastic``);
   :mod:`.sensor_map`: a general linear force/torque map regularised toward the paper's model;
-  :mod:`.temperature`: a bias that follows the sensor's temperature, chosen by held-out error.
+  :mod:`.temperature`: a bias that follows the sensor's temperature (its regressor for
+  ``--bias-drift temperature``, and the two-stage reference fits of the bench).
 - :mod:`.design`: D-optimal calibration poses, :mod:`.reachable_design` on an arm that does not
   reach every orientation; :mod:`.collect`: static readings at a list of poses from any robot
   and sensor; :mod:`.still`: the still segments of a recording in motion.

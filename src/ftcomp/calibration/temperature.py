@@ -1,5 +1,4 @@
-"""A bias that follows the sensor's temperature: the bias model with a regressor, chosen by
-held-out evidence.
+"""A bias that follows the sensor's temperature: the bias model with a regressor.
 
 A strain-gauge sensor's zero moves with its temperature (Kim et al. 2025 cut a sensor's drift
 from 26 N to 2.7 N by compensating temperature). Where a recording has the sensor's
