@@ -8,6 +8,7 @@ import contextlib
 import csv
 import io
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -16,8 +17,11 @@ from scipy.spatial.transform import Rotation
 
 from calibration.temperature_data import SLOPES, floor_N, recording
 from ftcomp.cli import main
+from ftcomp.cli.common import live_end_lines
 from ftcomp.io.samples_csv import write_samples
 from ftcomp.samples import Samples
+from ftcomp.session.outcome import Outcome
+from ftcomp.session.stream import StreamResult
 
 
 def _write(path: Path, samples: Samples, *, temperature: bool = True) -> Path:
@@ -156,3 +160,13 @@ def test_a_live_session_with_a_sensor_without_temperature_is_one_line_exit_2(
     assert main([*args, "-c", str(cal), "--seconds", "1", "-o", str(out)]) == 2
     assert "the sensor reports no temperature_C" in _error_line(capsys)
     assert not out.exists()
+
+
+def test_a_live_sessions_end_says_when_temperatures_left_the_calibrated_range(
+    tmp_path: Path,
+) -> None:
+    said = "temperatures 21 .. 31.5 degC reach beyond ...; above 30 degC the bias is held there"
+    result = StreamResult(Outcome.DURATION, "", 10, 1.0, tmp_path / "log.csv")
+    assert not any("temperature" in line for line in live_end_lines(result))
+    lines = live_end_lines(replace(result, temperature_outside=said))
+    assert f"temperature bias model: {said}" in lines

@@ -156,6 +156,19 @@ def test_a_stream_compensates_each_reading_once_at_its_own_temperature(
     assert np.max(np.abs(contact.mean(axis=0))) < 0.03
     # every reading compensated once, each with its own temperature
     assert len(calls) >= result.readings and all(T is not None for T in calls)
+    assert result.temperature_outside == ""  # 22-30 degC: within the calibrated 20-30
+
+
+def test_a_pipeline_says_when_readings_left_the_calibrated_temperatures(thermal) -> None:
+    R = np.eye(3)
+    pipeline = WrenchPipeline(GravityCompensator(thermal), extra_channels=("temperature_C",))
+    for k, T in enumerate((25.0, 29.0, 21.0)):
+        pipeline.contact(k, _reading(R, T), R, (T,))
+    assert pipeline.temperature_outside() == ""
+    hot = pipeline.contact(3, _reading(R, 31.5), R, (31.5,))
+    np.testing.assert_allclose(hot, SLOPES * 1.5, atol=1e-9)  # held at 30 degC
+    said = pipeline.temperature_outside()
+    assert "temperatures 21 .. 31.5 degC" in said and "above 30 degC the bias is held" in said
 
 
 class _Still(NothingToClose):

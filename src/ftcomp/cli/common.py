@@ -128,7 +128,8 @@ def check_rebias_argument(args: argparse.Namespace) -> None:
 
 def live_end_lines(result: LiveResult) -> list[str]:
     """What every live command prints at its end besides its summary: the loop's timing line,
-    the rows its observers dropped, what the bias tracking did."""
+    the rows its observers dropped, what the bias tracking did, temperatures beyond a
+    temperature bias model's range."""
     lines = [] if result.timing is None else [result.timing.line()]
     if result.observer_dropped_rows:
         lines.append(
@@ -141,4 +142,6 @@ def live_end_lines(result: LiveResult) -> list[str]:
             f"{c[1]:+.3f} {c[2]:+.3f}] N [{c[3]:+.4f} {c[4]:+.4f} {c[5]:+.4f}] N·m from the "
             "calibration's"
         )
+    if result.temperature_outside:
+        lines.append(f"temperature bias model: {result.temperature_outside}")
     return lines

@@ -110,6 +110,8 @@ class WrenchPipeline:
         self.extra_channels = extra_channels
         #: Where each reading's temperature is in its extras (None: not used).
         self._temperature_at = _temperature_index(compensator, extra_channels)
+        #: The lowest and highest temperature compensated with [degC] (inf, -inf: none).
+        self._T_low, self._T_high = math.inf, -math.inf
         self.compensator = compensator
         self.bias_tracker = bias_tracker
         self.load = (
@@ -193,11 +195,25 @@ class WrenchPipeline:
         elif at is None:
             contact = c.compensate(wrench_sensor, R_base_sensor)
         else:  # the bias at this reading's temperature
-            contact = c.compensate(wrench_sensor, R_base_sensor, temperature_C=extras[at])
+            temperature = extras[at]
+            if temperature < self._T_low:
+                self._T_low = temperature
+            if temperature > self._T_high:
+                self._T_high = temperature
+            contact = c.compensate(wrench_sensor, R_base_sensor, temperature_C=temperature)
         tracker = self.bias_tracker
         if tracker is not None:  # the bias followed while still and free
             contact = tracker.correct(t_ns * 1e-9, contact, R_base_sensor)
         return contact
+
+    def temperature_outside(self) -> str:
+        """What the calibration's temperature bias model did with the readings' temperatures
+        beyond its calibrated range, one sentence ("" when there were none, or no model)."""
+        c = self.compensator
+        heat = c.temperature_drift if c is not None else None
+        if heat is None or self._T_low > self._T_high:
+            return ""
+        return heat.outside(self._T_low, self._T_high) or ""
 
     def push(
         self,

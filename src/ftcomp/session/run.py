@@ -360,6 +360,9 @@ class RunResult:
         bias_updates: cycles that moved the tracked bias.
         filter_hz: the contact wrench's low-pass the controller ran with [Hz].
         stale_after_s: the age at which a reading stopped the run [s] (:func:`stale_after_s_for`).
+        temperature_outside: what a temperature bias model did with readings beyond its
+            calibrated temperatures (held at the range's nearer end), one sentence; "" when
+            there were none.
     """
 
     outcome: Outcome
@@ -377,6 +380,7 @@ class RunResult:
     bias_updates: int = 0
     filter_hz: float = math.nan
     stale_after_s: float = math.nan
+    temperature_outside: str = ""
 
     @property
     def faulted(self) -> bool:
@@ -567,6 +571,7 @@ def run_compliant(
         observer_dropped_rows=dropped,
         bias_correction=tracker.correction.copy() if tracker is not None else None,
         bias_updates=tracker.updates if tracker is not None else 0,
+        temperature_outside=pipeline.temperature_outside(),
         filter_hz=wrench_filter.cutoff_hz if wrench_filter is not None else math.nan,
         stale_after_s=controller.limits.stale_after_s,
     )

@@ -252,6 +252,9 @@ class StreamResult:
         bias_correction: the tracked bias minus the calibration's at the end [N, N*m], (6,)
             (None: not tracking).
         bias_updates: readings logged that moved the tracked bias.
+        temperature_outside: what a temperature bias model did with readings beyond its
+            calibrated temperatures (held at the range's nearer end), one sentence; "" when
+            there were none.
     """
 
     outcome: Outcome
@@ -267,6 +270,7 @@ class StreamResult:
     observer_dropped_rows: int = 0
     bias_correction: NDArray[np.float64] | None = field(default=None, repr=False)
     bias_updates: int = 0
+    temperature_outside: str = ""
 
     @property
     def rate_hz(self) -> float:
@@ -447,4 +451,5 @@ def stream(
         observer_dropped_rows=dropped,
         bias_correction=tracker.correction.copy() if tracker is not None else None,
         bias_updates=logger.bias_updates,
+        temperature_outside=pipeline.temperature_outside(),
     )
