@@ -153,6 +153,7 @@ def register(parser: argparse.ArgumentParser) -> None:
     add_field_option(parser, RunConfig, "duration_s", "--seconds")
     add_field_option(parser, SettleRule, "band_N", "--settle-band-N", none_means="run --seconds")
     add_field_option(parser, SettleRule, "hold_s", "--settle-s")
+    add_field_option(parser, SettleRule, "then_hold_s", "--settle-then-s")
     p("--dry-run", action="store_true", help="compute and log commands, send none")
     p("-o", "--output", required=True, metavar="RUN.csv", help="the log, one row per cycle")
     p("--force", action="store_true", help="replace an existing output file")
@@ -192,7 +193,11 @@ def _config(args: argparse.Namespace) -> RunConfig:
         wrench_desired=tuple(args.wrench_desired),
         filter_hz=args.filter_hz,
     )
-    settle = SettleRule(args.settle_band_N, args.settle_s) if args.settle_band_N else None
+    settle = (
+        SettleRule(args.settle_band_N, args.settle_s, then_hold_s=args.settle_then_s)
+        if args.settle_band_N
+        else None
+    )
     return RunConfig(
         admittance,
         duration_s=args.seconds,

@@ -40,11 +40,25 @@ from ftcomp.errors import ParameterError
 from ftcomp.hardware.protocols import ReportsLateness, Robot
 from ftcomp.session.outcome import Outcome
 
-__all__ = ["DEFAULT_HOLD_S", "CompliantStep", "CycleRecord", "SettleRule", "Settling"]
+__all__ = [
+    "DEFAULT_HOLD_S",
+    "DEFAULT_THEN_HOLD_S",
+    "CompliantStep",
+    "CycleRecord",
+    "SettleRule",
+    "Settling",
+]
 
 #: How long the force error must stay in the band by default [s]; also the window a run's
 #: final error is averaged over without a settle rule.
 DEFAULT_HOLD_S = 0.3
+#: How long a run stays under control once settled by default [s]. The error enters the band
+#: from one side and the rule judges it at once, so a run that ended there would leave up to
+#: the band's width uncorrected; on a soft surface (the twin's sponge: 1 / (K2 * stiffness) =
+#: 0.4 s with the paper's gains) a second more takes the rest down tenfold: placements of the
+#: twin's Net F/T pair (5 Hz wrench filter, the truth's calibration) ended 0.015-0.030 N short
+#: with 0 s, 0.004-0.012 N with 1 s (six runs each).
+DEFAULT_THEN_HOLD_S = 1.0
 
 #: Twist [m/s, rad/s] a caller adds to the law's (a planned motion), from the reading; None: none.
 Nominal = Callable[[Reading], "NDArray[np.float64] | None"]
@@ -54,7 +68,7 @@ Nominal = Callable[[Reading], "NDArray[np.float64] | None"]
 class SettleRule:
     """When a compliant run is done: every selected force error, low-passed at ``cutoff_hz``,
     within ``band_N`` [N] of zero for ``hold_s`` [s]; then the run goes on under control for
-    ``then_hold_s`` [s] (0: it ends at once).
+    ``then_hold_s`` [s] (0: it ends at once; by default :data:`DEFAULT_THEN_HOLD_S`).
 
     The error judged is the one the controller acted on (control frame, after its own filter);
     the rule's slower filter only keeps sensor noise out of the decision.
@@ -65,7 +79,9 @@ class SettleRule:
     )
     hold_s: float = param(DEFAULT_HOLD_S, gt=0.0, unit="s", help="... for this long")
     cutoff_hz: float = param(2.0, gt=0.0, unit="Hz", help="low-pass of the error judged")
-    then_hold_s: float = param(0.0, ge=0.0, unit="s", help="control kept on after settling")
+    then_hold_s: float = param(
+        DEFAULT_THEN_HOLD_S, ge=0.0, unit="s", help="control kept on after settling"
+    )
 
     def __post_init__(self) -> None:
         check_fields(self)

@@ -138,14 +138,18 @@ def cycle_row(record: CycleRecord, t0_ns: int) -> list[float]:
     ]
 
 
-#: The contact wrench's low-pass by default [Hz] ...
-FILTER_HZ = 20.0
+#: The contact wrench's low-pass by default [Hz] ... The combined law's derivative (K1) turns
+#: the sensor's noise into velocity, more the wider the filter (its spread grows as the cutoff
+#: to the power 3/2), and a soft surface under the load feels each jolt: on the twin's Net F/T
+#: (0.125 N of noise at 500 Hz) six placements on the sponge each ended 0.004-0.043 N off the
+#: load's weight with 20 Hz, pressing 0.07-0.38 N beyond it on the way; with 5 Hz 0.015-0.030 N
+#: short, never pressed. The force loop it sits in is slower than 5 Hz on any surface the arm
+#: can press (on the stiff book, K2 = 0.1 mm/(s*N): 1 / (K2 * 1.4e5 N/m) = 71 ms).
+FILTER_HZ = 5.0
 #: ... and at most this share of the sensor's sample rate: the filter's time constant then
 #: spans three of the sensor's samples (1 / (2 pi rate / 20) = 3.2 sample periods). A sensor
 #: slower than the loop (an FT 300's 100 Hz under a UR's 500 Hz) holds each reading for
-#: several cycles; at 20 Hz the filter passes those steps, K1's derivative turns each into a
-#: jolt of the arm, and a sponge under the load feels the sensor's noise: the twin's FT 300
-#: faces ended placements 0.05-0.08 N short of the weight, at 5 Hz within 0.03 N.
+#: several cycles, steps the filter must not pass to K1's derivative.
 FILTER_SHARE_OF_RATE = 1.0 / 20.0
 #: How long ``run`` waits for a sensor to have measured its rate [s].
 RATE_WAIT_S = 1.0
