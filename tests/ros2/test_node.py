@@ -36,7 +36,7 @@ from ros2_graph import peer, ros2_graph_fixture, stop  # noqa: F401  (the fixtur
 
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.errors import InputFileError, ParameterError
-from ftcomp.io.calibration_json import FORMAT, model_to_dict
+from ftcomp.io.calibration_json import FORMAT, load_calibration, model_to_dict
 from ftcomp.ros2.node import CompensationNode
 from ftcomp.ros2.rclpy_runtime import (
     DESCRIPTION_QOS,
@@ -324,6 +324,26 @@ def test_a_urdf_without_the_frames_stops_the_node_at_start(
 ) -> None:
     with pytest.raises(InputFileError, match=r"link 'tool0' is not in the URDF"):
         CompensationNode({**files, "sensor_frame": "tool0"}).__enter__()
+
+
+def test_a_calibration_whose_bias_follows_temperature_stops_the_node_at_start(
+    ros2_graph: int, files: dict[str, str]
+) -> None:
+    """A wrench topic carries no temperature: the node refuses the model, never applies its
+    bias at some temperature of its own."""
+    path = Path(files["calibration_file"])
+    data = json.loads(path.read_text())
+    data["bias_drift"] = {
+        "model": "temperature",
+        "T_ref_C": 25.0,
+        "T_range_C": [22.0, 28.0],
+        "slopes_per_C": [0.01, 0.0, 0.02, 0.0, 0.0, 0.001],
+        "std_errors": [0.001] * 6,
+    }
+    path.write_text(json.dumps(data))
+    assert load_calibration(path).bias_drift is not None  # a valid file
+    with pytest.raises(ParameterError, match="bias follows the sensor's temperature"):
+        CompensationNode(files).__enter__()
 
 
 def test_a_ros_parameter_of_the_wrong_type_names_the_parameter(

@@ -57,7 +57,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ftcomp.calibration.rebias import rebias
-from ftcomp.calibration_record import Calibration
+from ftcomp.calibration_record import Calibration, TemperatureBiasDrift
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.compensation.online import LOAD_STATE_CODES
 from ftcomp.compensation.pipeline import WrenchPipeline
@@ -298,8 +298,15 @@ class CompensationNode:
         new estimate: a load held is weighed again once the gripper next grasps one).
 
         Raises:
-            ParameterError: with ``online_load``, a calibration without the tool's weight.
+            ParameterError: with ``online_load``, a calibration without the tool's weight; a
+                bias that follows the sensor's temperature (a wrench topic carries none).
         """
+        if isinstance(calibration.bias_drift, TemperatureBiasDrift):
+            raise ParameterError(
+                "calibration_file: its bias follows the sensor's temperature, which a "
+                "WrenchStamped topic does not carry: calibrate with another --bias-drift for "
+                "the node"
+            )
         compensator = GravityCompensator(calibration)
         pipeline = None
         if self.config is not None and self.config.online_load:
