@@ -1,8 +1,12 @@
-"""The device conformance suite: every robot face x sensor face of the twin, through the real
-client libraries, the whole first session and every declared fault.
+"""The device conformance suite: every robot face and every sensor face of the twin, through
+the real client libraries, the whole first session and every declared fault.
 
-For each pair the registry (:mod:`ftcomp.hardware.devices`) declares, against ``ftcomp twin
---robot R --sensor S``, with the URIs its ready line names:
+Each face is run with the first face of the other kind (the registry's order: the UR5e for a
+sensor face, the Net F/T for a robot face): a face's protocol is what the suite proves, and its
+partner only carries the session. Every robot face with every sensor face is a product that
+grows with each device and holds pairs no cell has (a Franka under a UR controller's URCap
+stream); ``FTCOMP_CONFORMANCE_PAIRS=grid`` runs it all the same. For each pair, against
+``ftcomp twin --robot R --sensor S``, with the URIs its ready line names:
 
 - ``poses design --robot URI`` -> ``record`` at the designed poses -> ``calibrate``: the
   13 identified numbers each within its family bound of the twin's truth, and the 12
@@ -57,29 +61,37 @@ KEYS = ("tool_weight_N", "center_of_gravity_m", "force_bias_N", "torque_bias_Nm"
 CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"
 
 
-def _pairs() -> list[Any]:
-    pairs = []
-    for robot_name, robot in twin_faces("robot").items():
-        for sensor_name, sensor in twin_faces("sensor").items():
-            missing = [
-                m
-                for d in (robot, sensor)
-                for m in (d.twin.requires if d.twin else ())
-                if importlib.util.find_spec(m) is None
-            ]
-            marks = [pytest.mark.skip(reason=f"not installed: {', '.join(missing)}")] * bool(
-                missing
-            )
-            pairs.append(
-                pytest.param((robot, sensor), id=f"{robot_name}-{sensor_name}", marks=marks)
-            )
-    return pairs
+#: Set to ``grid`` to run every robot face with every sensor face (the default is each face
+#: with the first face of the other kind: the module docstring).
+PAIRS_ENV = "FTCOMP_CONFORMANCE_PAIRS"
 
 
 def _first(kind: str) -> str:
-    """The first face of a kind (the registry's order): the partner a face's own faults and
-    the book placement are run with."""
+    """The first face of a kind (the registry's order): the partner each face of the other
+    kind is run with, its faults and the book placement too."""
     return next(iter(twin_faces(kind)))  # type: ignore[arg-type]
+
+
+def _pairs() -> list[Any]:
+    robots, sensors = twin_faces("robot"), twin_faces("sensor")
+    if os.environ.get(PAIRS_ENV) == "grid":
+        names = [(r, s) for r in robots for s in sensors]
+    else:
+        first_robot, first_sensor = _first("robot"), _first("sensor")
+        names = [(first_robot, s) for s in sensors]
+        names += [(r, first_sensor) for r in robots if r != first_robot]
+    pairs = []
+    for robot_name, sensor_name in names:
+        robot, sensor = robots[robot_name], sensors[sensor_name]
+        missing = [
+            m
+            for d in (robot, sensor)
+            for m in (d.twin.requires if d.twin else ())
+            if importlib.util.find_spec(m) is None
+        ]
+        marks = [pytest.mark.skip(reason=f"not installed: {', '.join(missing)}")] * bool(missing)
+        pairs.append(pytest.param((robot, sensor), id=f"{robot_name}-{sensor_name}", marks=marks))
+    return pairs
 
 
 def _faults() -> list[Any]:

@@ -3,8 +3,10 @@ command line, the twin and the conformance suite pick them up (``FTCOMP_DEVICES`
 
 The module (``toy_devices.py`` beside this file, copied to a temporary folder under another
 name so that nothing imports it by accident) declares a toy arm and a toy F/T sensor, each a
-live backend and a twin face. The conformance suite is then run on the toy pair as on any
-other: record at designed poses, calibrate, stream, place a load, the faces' faults.
+live backend and a twin face. The conformance suite pairs each with the first face of the
+other kind; asked for the grid of every pair (``FTCOMP_CONFORMANCE_PAIRS=grid``), it is run on
+the toy pair as on any other: record at designed poses, calibrate, stream, place a load, the
+faces' faults.
 """
 
 from __future__ import annotations
@@ -67,23 +69,35 @@ def test_the_command_line_offers_the_new_devices(env: dict[str, str]) -> None:
     assert "--fault: 'toybot-silent' is declared by neither ur5e nor netft" in refused.stderr
 
 
+SUITE = str(HERE / "test_conformance.py")
+
+
+def _collected(env: dict[str, str]) -> set[str]:
+    """The conformance suite's test ids (what is in brackets) with ``env``."""
+    collected = subprocess.run(
+        [sys.executable, "-m", "pytest", SUITE, "--collect-only", "-q", "-p", "no:cacheprovider"],
+        capture_output=True, text=True, env=env, timeout=120, check=False, cwd=HERE.parent.parent,
+    )  # fmt: skip
+    return set(re.findall(r"\[([^\]]+)\]", collected.stdout))
+
+
 def test_the_conformance_suite_runs_every_pair_and_the_toy_pair_passes(
     env: dict[str, str],
 ) -> None:
-    suite = str(HERE / "test_conformance.py")
-    collected = subprocess.run(
-        [sys.executable, "-m", "pytest", suite, "--collect-only", "-q", "-p", "no:cacheprovider"],
-        capture_output=True, text=True, env=env, timeout=120, check=False, cwd=HERE.parent.parent,
-    )  # fmt: skip
-    ids = set(re.findall(r"\[([^\]]+)\]", collected.stdout))
+    # By default each new face with the first face of the other kind ...
+    star = {i.split("-")[0] + "-" + i.split("-")[1] for i in _collected(env)}
+    assert {"ur5e-toyft", "toybot-netft"} <= star and "toybot-toyft" not in star, star
+    # ... and with the grid asked for, every robot face with every sensor face.
+    env = {**env, "FTCOMP_CONFORMANCE_PAIRS": "grid"}
+    ids = _collected(env)
     for pair in ("ur5e-netft", "ur5e-toyft", "toybot-netft", "toybot-toyft"):
-        assert any(i.startswith(pair) for i in ids), (pair, collected.stdout[-2000:])
+        assert any(i.startswith(pair) for i in ids), (pair, sorted(ids))
     # each face's faults once: the toy sensor's with the first robot face, the toy arm's with
     # the first sensor face
     assert "ur5e-toyft-toyft-silent" in ids and "toybot-netft-toybot-silent" in ids
     assert "toybot-toyft-toyft-silent" not in ids
     run = subprocess.run(
-        [sys.executable, "-m", "pytest", suite, "-q", "-p", "no:cacheprovider", "-k",
+        [sys.executable, "-m", "pytest", SUITE, "-q", "-p", "no:cacheprovider", "-k",
          "toybot-toyft or ur5e-toyft-toyft-silent or toybot-netft-toybot-silent"],
         capture_output=True, text=True, env=env, timeout=600, check=False, cwd=HERE.parent.parent,
     )  # fmt: skip
