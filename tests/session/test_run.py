@@ -124,10 +124,9 @@ def test_a_run_settles_on_the_sponge_and_reports_its_figures(
 
 
 class _SlowSensor(NothingToClose):
-    """The cell's sensor, saying it samples at 50 Hz (slower than the default filter's 5 Hz
-    allows: a twentieth of its rate)."""
+    """The cell's sensor, saying it samples at 100 Hz (an FT 300's rate)."""
 
-    sample_rate_hz = 50.0
+    sample_rate_hz = 100.0
 
     def __init__(self, sensor: WrenchSensor) -> None:
         self.sensor = sensor
@@ -142,14 +141,13 @@ class _SlowSensor(NothingToClose):
 def test_the_wrench_filter_is_a_twentieth_of_a_slower_sensors_rate(
     tool: GravityModel, tmp_path: Path
 ) -> None:
-    assert filter_hz_for(None) == 5.0 and filter_hz_for(1000.0) == 5.0
-    assert filter_hz_for(100.0) == 5.0
-    assert filter_hz_for(50.0) == 2.5  # time constant 64 ms: three of its samples
+    assert filter_hz_for(None) == 10.0 and filter_hz_for(1000.0) == 10.0
+    assert filter_hz_for(100.0) == 5.0  # time constant 32 ms: three of its samples
     config = RunConfig(AdmittanceConfig(_limits()), duration_s=0.1)
     with ftcomp.open_robot(PLACE) as robot, ftcomp.open_sensor("sim://", robot) as sensor:
-        assert run_compliant(robot, sensor, tool, config, tmp_path / "a.csv").filter_hz == 5.0
+        assert run_compliant(robot, sensor, tool, config, tmp_path / "a.csv").filter_hz == 10.0
         slow = _SlowSensor(sensor)
-        assert run_compliant(robot, slow, tool, config, tmp_path / "b.csv").filter_hz == 2.5
+        assert run_compliant(robot, slow, tool, config, tmp_path / "b.csv").filter_hz == 5.0
         given = RunConfig(AdmittanceConfig(_limits(), filter_hz=12.0), duration_s=0.1)
         assert run_compliant(robot, slow, tool, given, tmp_path / "c.csv").filter_hz == 12.0
 
@@ -164,7 +162,7 @@ def test_a_reading_is_stale_only_when_older_than_four_of_its_sensors_periods(
     with ftcomp.open_robot(PLACE) as robot, ftcomp.open_sensor("sim://", robot) as sensor:
         fast = run_compliant(robot, sensor, tool, config, tmp_path / "a.csv")
         slow = run_compliant(robot, _SlowSensor(sensor), tool, config, tmp_path / "b.csv")
-    assert fast.stale_after_s == 0.02 and slow.stale_after_s == pytest.approx(0.08)
+    assert fast.stale_after_s == 0.02 and slow.stale_after_s == pytest.approx(0.04)
 
 
 @pytest.mark.parametrize(

@@ -304,8 +304,8 @@ class CompensationNode:
         if isinstance(calibration.bias_drift, TemperatureBiasDrift):
             raise ParameterError(
                 "calibration_file: its bias follows the sensor's temperature, which a "
-                "WrenchStamped topic does not carry: calibrate with another --bias-drift for "
-                "the node"
+                "WrenchStamped topic does not carry: the node needs a calibration with another "
+                "bias model"
             )
         compensator = GravityCompensator(calibration)
         pipeline = None

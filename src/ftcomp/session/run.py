@@ -140,12 +140,14 @@ def cycle_row(record: CycleRecord, t0_ns: int) -> list[float]:
 
 #: The contact wrench's low-pass by default [Hz] ... The combined law's derivative (K1) turns
 #: the sensor's noise into velocity, more the wider the filter (its spread grows as the cutoff
-#: to the power 3/2), and a soft surface under the load feels each jolt: on the twin's Net F/T
-#: (0.125 N of noise at 500 Hz) six placements on the sponge each ended 0.004-0.043 N off the
-#: load's weight with 20 Hz, pressing 0.07-0.38 N beyond it on the way; with 5 Hz 0.015-0.030 N
-#: short, never pressed. The force loop it sits in is slower than 5 Hz on any surface the arm
-#: can press (on the stiff book, K2 = 0.1 mm/(s*N): 1 / (K2 * 1.4e5 N/m) = 71 ms).
-FILTER_HZ = 5.0
+#: to the power 3/2), and a soft surface under the load feels each jolt; a narrow filter's lag
+#: makes a stiff contact ring instead. On the twin's Net F/T (0.125 N of noise at 500 Hz) the
+#: sponge placements (the paper's gains, the truth's calibration, a second under control after
+#: settling) ended 0.002-0.015 N short at 10 Hz and 0.004-0.012 N at 5 Hz, never pressing
+#: beyond the weight; at 20 Hz, stopping at settle, 0.004-0.043 N off, pressing up to 0.38 N.
+#: On the book the FR3 twin pressed 1.85 N beyond the weight at 5 Hz (45 ms of lag in a loop
+#: of 71 ms: 1 / (K2 * 1.4e5 N/m) at K2 = 0.1 mm/(s*N)), within 0.3 N at 10 Hz and 20 Hz.
+FILTER_HZ = 10.0
 #: ... and at most this share of the sensor's sample rate: the filter's time constant then
 #: spans three of the sensor's samples (1 / (2 pi rate / 20) = 3.2 sample periods). A sensor
 #: slower than the loop (an FT 300's 100 Hz under a UR's 500 Hz) holds each reading for
