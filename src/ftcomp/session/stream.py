@@ -238,7 +238,7 @@ class StreamResult:
             recording ran out), ``INTERRUPTED`` (Ctrl-C) or ``ERROR`` (a sensor or connection
             fault, see ``message``).
         message: what stopped it, one line ("" when it ended normally).
-        readings: readings logged.
+        readings: readings logged (the log's rows).
         elapsed_s: the session's duration [s].
         log: the log's path.
         health: the sensor's own account of its stream at the end (lost and received packets,
@@ -436,11 +436,14 @@ def stream(
         loop_timing = clock.summary()
         save_timing(log_path, loop_timing, log=log)
         dropped = log.dropped_rows
+    # The rows in the file, not the logger's count: a Ctrl-C between the count and the row
+    # being kept (Python raises it at a call) would make them differ by one.
+    readings = log.rows
     health = sensor.stream_health() if isinstance(sensor, ReportsStreamHealth) else None
     return StreamResult(
         outcome=outcome,
         message=message,
-        readings=logger.count,
+        readings=readings,
         elapsed_s=logger.elapsed_s,
         log=log_path,
         health=health,
