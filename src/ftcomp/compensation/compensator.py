@@ -14,7 +14,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.calibration_record import (
-    AnyBiasDrift,
     Calibration,
     MountRotation,
     TemperatureBiasDrift,
@@ -56,9 +55,7 @@ class GravityCompensator:
         self.model = model
         #: The calibration's mount (None: the orientations given are the sensor's).
         self.mount: MountRotation | None = mount
-        #: The calibration's bias drift (None: constant bias).
-        self.bias_drift: AnyBiasDrift | None = drift
-        #: The drift applied by each reading's time (None: none in time).
+        #: The calibration's bias drift applied by each reading's time (None: none in time).
         self.time_drift: TimeBiasDrift | None = (
             None if isinstance(drift, TemperatureBiasDrift) else drift
         )
@@ -100,7 +97,7 @@ class GravityCompensator:
     def needs_temperature(self) -> bool:
         """Whether :meth:`compensate` needs each reading's sensor temperature: the
         calibration's bias follows it."""
-        return self._T is not None
+        return self.temperature_drift is not None
 
     def compensate(
         self,
