@@ -137,25 +137,6 @@ class Device:
     twin: TwinFace | None = None
 
 
-def _pending(face: TwinFace) -> TwinFace | None:
-    """A twin face written and declared, not yet registered (the twin does not offer it and
-    the conformance suite does not run it) until the suite passes with it reliably.
-
-    The FT 300's faces, 2026-11-28 on this 2-core host: their stream, sponge placements and
-    faults pass (the placements within 0.05 N since ``run``'s defaults changed: the wrench
-    filter at a twentieth of their 100 Hz and a second under control after settling), but the
-    calibration misses the twin's truth now and then: ``ft300-rtu`` in two runs of three (the
-    force bias's x by 3.8 and 4.4 standard errors, 0.019 and 0.020 N, the family bound 4.06;
-    the residuals at each pose alike in both runs), ``ft300-urcap`` once in six (a clean
-    clone's CI). The twin's noise has one seed, and both faces send the same readings (12 s of
-    them averaged alike to 0.1 mN); a 500 Hz Net F/T at the same poses passes. Not yet known:
-    what in a 100 Hz stream (each reading in transit 8-20 ms, 60 readings spanning 0.6 s after
-    the arm settled) meets the pose model less well. Registering one is replacing
-    ``_pending(face)`` by ``face``."""
-    del face
-    return None
-
-
 _NOT_ON_A_TWIN: Final = "no twin face: a file, a fixed pose or the simulated cell itself"
 
 #: The cell's network going silent: declared by the robot face and by each sensor face on the
@@ -363,30 +344,28 @@ BUILT_IN: Final[tuple[Device, ...]] = (
         extra="robotiq",
         tested="the twin's URCap stream (the line format as users' drivers read it); no "
         "real controller",
-        twin=_pending(
-            TwinFace(
-                "ft300-urcap",
-                "ftcomp.twin.robotiq_face:RobotiqUrcapFace",
-                faults=(
-                    _FT300_FROZEN,
-                    _FT300_OVERRANGE,
-                    Fault(
-                        "urcap-garbled",
-                        "one line of the URCap's stream is cut short",
-                        "sensor fault: a line that is not six numbers",
-                        0.1,
-                    ),
-                    Fault(
-                        "urcap-disconnect",
-                        "the controller closes the URCap's stream",
-                        "sensor fault: the URCap stream ended",
-                        0.1,
-                    ),
-                    _NETWORK_LOSS,
+        twin=TwinFace(
+            "ft300-urcap",
+            "ftcomp.twin.robotiq_face:RobotiqUrcapFace",
+            faults=(
+                _FT300_FROZEN,
+                _FT300_OVERRANGE,
+                Fault(
+                    "urcap-garbled",
+                    "one line of the URCap's stream is cut short",
+                    "sensor fault: a line that is not six numbers",
+                    0.1,
                 ),
-                rate_hz=100.0,
-                max_rate_hz=100.0,
+                Fault(
+                    "urcap-disconnect",
+                    "the controller closes the URCap's stream",
+                    "sensor fault: the URCap stream ended",
+                    0.1,
+                ),
+                _NETWORK_LOSS,
             ),
+            rate_hz=100.0,
+            max_rate_hz=100.0,
         ),
     ),
     Device(
@@ -398,30 +377,28 @@ BUILT_IN: Final[tuple[Device, ...]] = (
         extra="robotiq",
         tested="the twin's FT 300 on a pty through pyserial 3.5 (frames and CRC as Robotiq's "
         "manual gives them); no real sensor",
-        twin=_pending(
-            TwinFace(
-                "ft300-rtu",
-                "ftcomp.twin.robotiq_face:RobotiqRtuFace",
-                faults=(
-                    _FT300_FROZEN,
-                    _FT300_OVERRANGE,
-                    Fault(
-                        "rtu-crc",
-                        "one stream frame arrives with a wrong CRC",
-                        "sensor fault: corrupted frame (bad CRC)",
-                        0.1,
-                    ),
-                    Fault(
-                        "rtu-disconnect",
-                        "the sensor's USB adapter is unplugged",
-                        "sensor fault: the serial device is gone",
-                        0.1,
-                    ),
+        twin=TwinFace(
+            "ft300-rtu",
+            "ftcomp.twin.robotiq_face:RobotiqRtuFace",
+            faults=(
+                _FT300_FROZEN,
+                _FT300_OVERRANGE,
+                Fault(
+                    "rtu-crc",
+                    "one stream frame arrives with a wrong CRC",
+                    "sensor fault: corrupted frame (bad CRC)",
+                    0.1,
                 ),
-                rate_hz=100.0,
-                max_rate_hz=100.0,
-                requires=("serial",),
+                Fault(
+                    "rtu-disconnect",
+                    "the sensor's USB adapter is unplugged",
+                    "sensor fault: the serial device is gone",
+                    0.1,
+                ),
             ),
+            rate_hz=100.0,
+            max_rate_hz=100.0,
+            requires=("serial",),
         ),
     ),
     Device(
