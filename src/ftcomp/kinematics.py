@@ -1,7 +1,8 @@
 """The sensor frame's motion and what it does to the rigid body below the sensor.
 
 :func:`sensor_motion`: linear acceleration, angular velocity and angular acceleration of the
-sensor frame, in the sensor frame, from its measured poses. :func:`inertial_wrench`: the
+sensor frame, in the sensor frame, from its measured poses (:func:`imu_motion`: the same from an
+IMU in the sensor). :func:`inertial_wrench`: the
 Newton-Euler wrench of a rigid body in that motion (docs/calibration.md). Used by the inertial
 compensation (:mod:`ftcomp.compensation.inertial`) and the inertia identification
 (:mod:`ftcomp.calibration.dynamic`), so it sits below both.
@@ -26,6 +27,7 @@ The samples must be evenly spaced (one per control cycle).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -37,6 +39,7 @@ from ftcomp.errors import ParameterError
 __all__ = [
     "INERTIA_PARAMETERS",
     "SensorMotion",
+    "imu_motion",
     "inertia_from_parameters",
     "inertial_wrench",
     "sensor_motion",
@@ -95,22 +98,37 @@ def sensor_motion(
             f"sensor_motion needs t (N,), p (N, 3), R (N, 3, 3); got {t.shape}, {p.shape}, "
             f"{R.shape}"
         )
+    smooth = _smoother(t, "sensor_motion", window_s, polyorder)
+    accel_base = smooth(p, 2)
+    Rt = R.transpose(0, 2, 1)
+    accel = np.einsum("nij,nj->ni", Rt, accel_base)
+    omega = _unskew(Rt @ smooth(R.reshape(n, 9), 1).reshape(n, 3, 3))
+    alpha = _unskew(Rt @ smooth(R.reshape(n, 9), 2).reshape(n, 3, 3))
+    return SensorMotion(accel, omega, alpha)
+
+
+def _smoother(
+    t: NDArray[np.float64], who: str, window_s: float, polyorder: int
+) -> Callable[[NDArray[np.float64], int], NDArray[np.float64]]:
+    """The Savitzky-Golay smoother (and differentiator) of series sampled at the evenly spaced
+    times ``t``: ``smooth(x, deriv)`` along axis 0 (``who`` names the caller in errors)."""
+    n = len(t)
     if polyorder < 2:
         raise ParameterError(f"polyorder must be >= 2 for accelerations, got {polyorder}")
     if n < 2:
-        raise ParameterError(f"sensor_motion needs at least 2 samples, got {n}")
+        raise ParameterError(f"{who} needs at least 2 samples, got {n}")
     steps = np.diff(t)
     dt = float(np.median(steps))
     if not (math.isfinite(dt) and dt > 0.0) or np.abs(steps - dt).max() > 0.01 * dt:
         raise ParameterError(
-            "sensor_motion needs evenly spaced samples (one per control cycle); the steps "
+            f"{who} needs evenly spaced samples (one per control cycle); the steps "
             f"range over [{steps.min():.6g}, {steps.max():.6g}] s"
         )
     window = max(polyorder + 2, round(window_s / dt))
     window += 1 - window % 2
     if n < window:
         raise ParameterError(
-            f"sensor_motion needs at least one filter window ({window} samples, "
+            f"{who} needs at least one filter window ({window} samples, "
             f"{window * dt:.3g} s); got {n} samples"
         )
 
@@ -119,12 +137,48 @@ def sensor_motion(
             savgol_filter(x, window, polyorder, deriv=deriv, delta=dt, axis=0, mode="interp")
         )
 
-    accel_base = smooth(p, 2)
-    Rt = R.transpose(0, 2, 1)
-    accel = np.einsum("nij,nj->ni", Rt, accel_base)
-    omega = _unskew(Rt @ smooth(R.reshape(n, 9), 1).reshape(n, 3, 3))
-    alpha = _unskew(Rt @ smooth(R.reshape(n, 9), 2).reshape(n, 3, 3))
-    return SensorMotion(accel, omega, alpha)
+    return smooth
+
+
+def imu_motion(
+    t_s: ArrayLike,
+    specific_force_sensor_mps2: ArrayLike,
+    angular_rate_sensor_rad_s: ArrayLike,
+    gravity_sensor_mps2: ArrayLike,
+    *,
+    window_s: float = 0.021,
+    polyorder: int = 3,
+) -> SensorMotion:
+    """The sensor frame's motion from an IMU in the sensor (its axes the sensor's), not from
+    poses: ``a = f + g_s`` (an accelerometer reads the specific force ``f``, the acceleration
+    less gravity), ``w`` the gyroscope's rate, ``alpha`` its derivative (the Savitzky-Golay
+    filter of :func:`sensor_motion`, over the same window).
+
+    Args:
+        t_s: sample times [s], (N,), evenly spaced (1 % jitter tolerated).
+        specific_force_sensor_mps2: the accelerometer's readings [m/s^2], sensor frame, (N, 3).
+        angular_rate_sensor_rad_s: the gyroscope's [rad/s], sensor frame, (N, 3).
+        gravity_sensor_mps2: gravity in the sensor frame at each sample [m/s^2], (N, 3): the
+            calibration's, so that the static model's tool gravity and ``-m a`` sum to the
+            accelerometer's ``-m f`` whatever its error.
+        window_s, polyorder: the filter (:func:`sensor_motion`'s).
+
+    Raises:
+        ParameterError: shapes disagree, the times are not evenly spaced, or the series is
+            shorter than one window.
+    """
+    t = np.asarray(t_s, dtype=float)
+    f = np.asarray(specific_force_sensor_mps2, dtype=float)
+    w = np.asarray(angular_rate_sensor_rad_s, dtype=float)
+    g = np.asarray(gravity_sensor_mps2, dtype=float)
+    n = len(t)
+    if t.ndim != 1 or any(x.shape != (n, 3) for x in (f, w, g)):
+        raise ParameterError(
+            f"imu_motion needs t (N,), and (N, 3) for the rest; got {t.shape}, {f.shape}, "
+            f"{w.shape}, {g.shape}"
+        )
+    smooth = _smoother(t, "imu_motion", window_s, polyorder)
+    return SensorMotion(f + g, w, smooth(w, 1))
 
 
 #: Order of the six inertia parameters: ``(Ixx, Iyy, Izz, Ixy, Ixz, Iyz)`` [kg m^2].

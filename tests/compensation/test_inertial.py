@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 from tests.compensation.test_kinematics import analytic_path
 
+from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.compensation.inertial import InertialCompensator
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 from ftcomp.huang2020.beyond_inertial import excitation_moves, record_moves
-from ftcomp.kinematics import inertial_wrench, sensor_motion
+from ftcomp.kinematics import SensorMotion, imu_motion, inertial_wrench, sensor_motion
 from ftcomp.model import GravityModel
 from ftcomp.sim.cell import HOME_Q_RAD, SimCell
 from ftcomp.sim.scene import SceneConfig
@@ -58,3 +59,47 @@ def test_kinematics_from_simulated_poses_match_the_simulators_truth() -> None:
     peak_w = np.abs(rec.truth[:, 3:6]).max()
     assert rms(motion.omega_sensor_rad_s[inner] - rec.truth[inner, 3:6]) < 0.01 * peak_w
     assert rms(motion.alpha_sensor_rad_s2[inner] - rec.truth[inner, 6:9]) < 0.01 * peak_alpha
+
+
+def _moving_tool() -> tuple[np.ndarray, np.ndarray, np.ndarray, SensorMotion]:
+    """Noise-free readings of TOOL moving along the analytic path (its whole Newton-Euler
+    wrench), the orientations, what an accelerometer in the sensor reads, the motion."""
+    t, _p, R, motion = analytic_path()
+    mass = TOOL.weight_N / STANDARD_GRAVITY_MPS2
+    readings = TOOL.predict(R) + inertial_wrench(mass, TOOL.center_of_gravity_m, INERTIA, motion)
+    g_sensor = np.einsum("nji,j->ni", R, TOOL.gravity_base_N) / mass
+    return t, readings, R, motion.accel_sensor_mps2 - g_sensor, motion
+
+
+def test_an_accelerometer_compensates_a_moving_tools_linear_inertia() -> None:
+    _t, _readings, R, f, motion = _moving_tool()
+    # A tool moving without turning (no rotational terms): the accelerometer's apparent
+    # gravity is all the static model needs.
+    linear = SensorMotion(motion.accel_sensor_mps2, 0 * f, 0 * f)
+    mass = TOOL.weight_N / STANDARD_GRAVITY_MPS2
+    readings = TOOL.predict(R) + inertial_wrench(mass, TOOL.center_of_gravity_m, INERTIA, linear)
+    compensator = GravityCompensator(TOOL)
+    np.testing.assert_allclose(
+        compensator.compensate(readings, R, specific_force_mps2=f), 0.0, atol=1e-12
+    )
+    one = compensator.compensate(readings[7], R[7], specific_force_mps2=f[7])
+    np.testing.assert_allclose(one, 0.0, atol=1e-12)
+    # Held at its pose's gravity instead, the move's m a is left in the force.
+    still = compensator.compensate(readings, R)
+    np.testing.assert_allclose(still[:, :3], -mass * motion.accel_sensor_mps2, atol=1e-12)
+    with pytest.raises(ParameterError, match="specific_force_mps2"):
+        compensator.compensate(readings, R, specific_force_mps2=f[:5])
+
+
+def test_the_whole_inertial_wrench_from_an_imu_compensates_a_turning_tool() -> None:
+    t, readings, R, f, motion = _moving_tool()
+    g_sensor = np.einsum("nji,j->ni", R, TOOL.gravity_base_N) / (
+        TOOL.weight_N / STANDARD_GRAVITY_MPS2
+    )
+    from_imu = imu_motion(t, f, motion.omega_sensor_rad_s, g_sensor)
+    out = InertialCompensator(TOOL, INERTIA).compensate(readings, R, from_imu)
+    inner = slice(20, -20)  # the derivative filter's edges extrapolate
+    # Only alpha is differentiated (within 5e-3 rad/s^2): through m c and the inertia it is
+    # at most 0.33 kg * 0.05 m * 5e-3 ~ 1e-4 N and |I| 5e-3 ~ 5e-6 N*m.
+    np.testing.assert_allclose(out[inner, :3], 0.0, atol=2e-4)
+    np.testing.assert_allclose(out[inner, 3:], 0.0, atol=2e-5)

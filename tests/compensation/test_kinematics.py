@@ -1,4 +1,5 @@
-"""The sensor frame's motion from poses (Savitzky-Golay) and the Newton-Euler wrench."""
+"""The sensor frame's motion from poses (Savitzky-Golay) or an IMU, and the Newton-Euler
+wrench."""
 
 from __future__ import annotations
 
@@ -6,8 +7,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
-from ftcomp.kinematics import SensorMotion, inertial_wrench, sensor_motion
+from ftcomp.kinematics import SensorMotion, imu_motion, inertial_wrench, sensor_motion
 from ftcomp.model import skew
 
 
@@ -72,3 +74,21 @@ def test_inertial_wrench_equals_the_sum_over_point_masses() -> None:
         torque = -np.cross(r, m[:, None] * acc).sum(axis=0)
         np.testing.assert_allclose(got[k], np.concatenate([force, torque]), atol=1e-12)
     assert skew(c).shape == (3, 3)
+
+
+def test_motion_from_an_imu_matches_the_analytic_motion() -> None:
+    t, _p, R, truth = analytic_path()
+    g_sensor = np.einsum("nji,j->ni", R, [0.0, 0.0, -STANDARD_GRAVITY_MPS2])
+    # What an accelerometer and a gyroscope on the sensor's axes read.
+    f = truth.accel_sensor_mps2 - g_sensor
+    motion = imu_motion(t, f, truth.omega_sensor_rad_s, g_sensor)
+    # a and w are the readings' own (exact algebra); alpha is the gyroscope's rate
+    # differentiated as the poses are (sensor_motion's bound).
+    np.testing.assert_allclose(motion.accel_sensor_mps2, truth.accel_sensor_mps2, atol=1e-12)
+    np.testing.assert_array_equal(motion.omega_sensor_rad_s, truth.omega_sensor_rad_s)
+    inner = slice(20, -20)
+    np.testing.assert_allclose(
+        motion.alpha_sensor_rad_s2[inner], truth.alpha_sensor_rad_s2[inner], atol=5e-3
+    )
+    with pytest.raises(ParameterError, match="imu_motion needs"):
+        imu_motion(t, f[:, :2], truth.omega_sensor_rad_s, g_sensor)

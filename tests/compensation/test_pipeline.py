@@ -17,6 +17,7 @@ from ftcomp.compensation.pipeline import MIN_RATE_READINGS, WrenchPipeline
 from ftcomp.control.loop import ControlCycle
 from ftcomp.control.safety import SafetyLimits
 from ftcomp.errors import ParameterError
+from ftcomp.hardware.protocols import IMU_CHANNELS
 from ftcomp.model import GravityModel
 from ftcomp.session.run import AdmittanceConfig, RunConfig, run_compliant
 from ftcomp.session.stream import StreamConfig, stream
@@ -136,3 +137,31 @@ def test_a_pipeline_passes_the_raw_reading_on_without_a_compensator() -> None:
     still = WrenchPipeline.weighing(MODEL, None, settings=OnlineSettings())
     with pytest.raises(ParameterError, match="still being measured"):
         still.contact(0, w, np.eye(3))
+
+
+def test_a_pipeline_with_the_accelerometer_takes_each_readings_own_acceleration() -> None:
+    channels = ("temperature_C", *IMU_CHANNELS)
+    pipeline = WrenchPipeline(
+        GravityCompensator(MODEL), extra_channels=channels, accelerometer=True
+    )
+    reading, R = np.arange(6.0), np.eye(3)
+    extras = (25.0, 0.4, -1.2, -9.3, 0.1, 0.2, 0.3)
+    np.testing.assert_array_equal(
+        pipeline.contact(0, reading, R, extras),
+        GravityCompensator(MODEL).compensate(reading, R, specific_force_mps2=extras[1:4]),
+    )
+    weighing = WrenchPipeline.weighing(MODEL, 500.0, extra_channels=channels, accelerometer=True)
+    online = OnlineLoadCompensator(MODEL, OnlineSettings(rate_Hz=500.0))
+    np.testing.assert_array_equal(
+        weighing.contact(0, reading, R, extras),
+        online.compensate(reading, R, specific_force_mps2=extras[1:4]),
+    )
+    # Without it the same reading is held at its pose's gravity.
+    plain = WrenchPipeline(GravityCompensator(MODEL), extra_channels=channels)
+    np.testing.assert_array_equal(
+        plain.contact(0, reading, R, extras), GravityCompensator(MODEL).compensate(reading, R)
+    )
+    with pytest.raises(ParameterError, match=r"accelerometer: the sensor reports no acc.*accel_y"):
+        WrenchPipeline(
+            GravityCompensator(MODEL), extra_channels=("accel_x_m_s2",), accelerometer=True
+        )

@@ -80,6 +80,18 @@ def warn_live_drift(calibration: Calibration, path: str, *, tracking: bool = Fal
         )
 
 
+def add_accelerometer_argument(parser: argparse.ArgumentParser) -> None:
+    """``--accelerometer``: the tool's (and a weighed load's) acceleration from the sensor's
+    IMU (the run's and the stream's ``accelerometer`` field)."""
+    parser.add_argument(
+        "--accelerometer",
+        action="store_true",
+        help="take the tool's acceleration (and a grasped load's) from the sensor's "
+        "accelerometer, so a moving tool's inertial force is compensated too (a sensor with an "
+        "IMU: Bota through bota-driver; default: off, the tool held still at its pose's gravity)",
+    )
+
+
 def add_track_bias_argument(parser: argparse.ArgumentParser) -> None:
     """``--track-bias``: the bias follows the sensor while the arm is still and free (its
     thresholds, in the help, are :class:`~ftcomp.compensation.bias_tracking.BiasTrackingConfig`'s

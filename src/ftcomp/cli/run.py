@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ftcomp.cli.common import (
+    add_accelerometer_argument,
     add_rebias_argument,
     add_track_bias_argument,
     check_rebias_argument,
@@ -82,9 +83,11 @@ def register(parser: argparse.ArgumentParser) -> None:
         help="weigh a grasped load online (rate: 1 / the robot's control period [Hz]) and "
         "compensate it too (default: off, the tool alone)",
     )
+    add_accelerometer_argument(parser)
     add_track_bias_argument(parser)
     add_rebias_argument(parser)
     map_field(parser, "online_load", "--online-load")
+    map_field(parser, "accelerometer", "--accelerometer")
     map_field(parser, "track_bias", "--track-bias")
     add_field_option(parser, AdmittanceConfig, "law")
     add_field_option(parser, AdmittanceConfig, "axes")
@@ -206,6 +209,7 @@ def _config(args: argparse.Namespace) -> RunConfig:
         max_late_cycles=args.max_late_cycles,
         online_load=args.online_load,
         track_bias=BiasTrackingConfig() if args.track_bias else None,
+        accelerometer=args.accelerometer,
     )
 
 

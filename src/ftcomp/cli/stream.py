@@ -24,6 +24,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from ftcomp.cli.common import (
+    add_accelerometer_argument,
     add_rebias_argument,
     add_track_bias_argument,
     check_rebias_argument,
@@ -68,6 +69,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         none_means=f"measured from the stamps of the first {MEASURE_RATE_S:g} s of readings, held "
         "back and then logged",
     )
+    add_accelerometer_argument(parser)
     add_track_bias_argument(parser)
     add_rebias_argument(parser)
     add_field_option(parser, StreamConfig, "duration_s", "--seconds", required=True)
@@ -115,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
         online_load=args.online_load,
         online_rate_hz=rate,
         track_bias=BiasTrackingConfig() if args.track_bias else None,
+        accelerometer=args.accelerometer,
     )
     inputs = [args.calibration] if args.calibration else []
     output = check_writable(args.output, overwrite=args.force, inputs=inputs)

@@ -19,6 +19,7 @@ from ftcomp.calibration_record import (
     TemperatureBiasDrift,
     TimeBiasDrift,
 )
+from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import ParameterError
 from ftcomp.model import GravityModel, skew
 
@@ -43,6 +44,13 @@ class GravityCompensator:
     temperature (``temperature_C``), held at the calibrated range's nearer end outside it;
     it needs that temperature for every reading (:attr:`needs_temperature`): without it
     :meth:`compensate` raises rather than silently use a constant bias.
+
+    With a sensor's accelerometer (an IMU in the sensor: ``specific_force_mps2``, what it reads,
+    the sensor's acceleration less gravity, sensor frame) the tool's wrench is that of its mass
+    under the *apparent* gravity ``-f`` rather than under gravity at the sensor's orientation:
+    ``m (g_s - a) = -m f``, so its linear inertial force is removed too (not the rotational
+    terms, which need the angular acceleration and the inertia: :mod:`.inertial`). The mass is
+    the calibrated weight over standard gravity (local gravity differs by up to 0.3 %).
     """
 
     def __init__(self, calibration: Calibration | GravityModel) -> None:
@@ -88,6 +96,14 @@ class GravityCompensator:
         # The temperature model on floats: slopes, reference and range.
         self._slopes = tuple(heat.slopes.tolist()) if heat is not None else (0.0,) * 6
         self._T = (heat.T_ref_C, heat.T_min_C, heat.T_max_C) if heat is not None else None
+        #: The tool's mass [kg] (its calibrated weight over standard gravity), which an
+        #: accelerometer's specific force turns into its apparent weight.
+        self.mass_kg = float(model.weight_N) / STANDARD_GRAVITY_MPS2
+        # The apparent weight -m f (sensor frame) into the frame A acts on (the recorded one).
+        self._f_to_s = -self.mass_kg * (
+            self.mount.R_rec_sensor if self.mount is not None else np.eye(3)
+        )
+        self._imu_matrix = (self._A @ self._f_to_s).T  # (3, 6): f -> the tool's wrench
         #: Unit vector along gravity, base frame (None for a weightless tool).
         self.gravity_dir_base = (
             self._gravity_base / np.linalg.norm(self._gravity_base) if model.weight_N else None
@@ -107,6 +123,7 @@ class GravityCompensator:
         out: NDArray[np.float64] | None = None,
         t_s: ArrayLike | None = None,
         temperature_C: ArrayLike | None = None,
+        specific_force_mps2: ArrayLike | None = None,
     ) -> NDArray[np.float64]:
         """Contact wrench ``[F'; M']`` (Eq. 22) [N, N*m], sensor frame.
 
@@ -120,6 +137,9 @@ class GravityCompensator:
             temperature_C: each sample's sensor temperature [degC], scalar or (N,): applies a
                 bias that follows it (needed with one; ignored without). A NaN temperature
                 gives a NaN wrench.
+            specific_force_mps2: each sample's accelerometer reading [m/s^2], sensor frame,
+                (3,) or (N, 3): the tool's weight and linear inertial force from it (class
+                docstring) instead of from ``R_base_sensor``.
 
         Returns:
             Shape (6,) or (N, 6).
@@ -136,21 +156,40 @@ class GravityCompensator:
                 "the calibration's bias follows the sensor's temperature (bias_drift "
                 "temperature): compensate needs each reading's temperature_C"
             )
+        f = None if specific_force_mps2 is None else np.asarray(specific_force_mps2, float)
         if w.shape == (6,) and R.shape == (3, 3):
             if t_s is not None and self.time_drift is not None:
                 w = w - self.time_drift.offset(t_s)
+            if f is None:
+                g0, g1, g2 = self._g
+                (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = R.tolist()
+                s = (
+                    g0 * a0 + g1 * b0 + g2 * c0,
+                    g0 * a1 + g1 * b1 + g2 * c1,
+                    g0 * a2 + g1 * b2 + g2 * c2,
+                )
+            elif f.shape == (3,):
+                s = tuple((self._f_to_s @ f).tolist())
+            else:
+                raise ParameterError(f"specific_force_mps2 must be (3,) here, got {f.shape}")
             if T is None:
-                return self._one(w, R, 0.0)
+                return self._one(w, s, 0.0)
             ref, low, high = T
             now = float(cast(float, temperature_C))
-            return self._one(w, R, min(max(now, low), high) - ref)
+            return self._one(w, s, min(max(now, low), high) - ref)
         if w.ndim == 2 and w.shape[1] == 6 and R.shape == (len(w), 3, 3):
             if out is None:
                 out = np.empty((len(w), 6))
             elif out.shape != w.shape or out.dtype != np.float64 or not out.flags.c_contiguous:
                 raise ParameterError("out must be a C-contiguous float64 array of shape (N, 6)")
-            # Tool gravity wrench of every sample in one (N, 9) @ (9, 6) product.
-            np.dot(np.ascontiguousarray(R).reshape(len(R), 9), self._batch_matrix, out=out)
+            if f is None:  # every sample's tool gravity in one (N, 9) @ (9, 6) product
+                np.dot(np.ascontiguousarray(R).reshape(len(R), 9), self._batch_matrix, out=out)
+            elif f.shape == (len(w), 3):
+                np.dot(f, self._imu_matrix, out=out)
+            else:
+                raise ParameterError(
+                    f"specific_force_mps2 must be ({len(w)}, 3) here, got {f.shape}"
+                )
             np.subtract(w, out, out=out)
             out -= self._bias
             if t_s is not None and self.time_drift is not None:
@@ -164,18 +203,11 @@ class GravityCompensator:
             f"(N, 3, 3); got {w.shape} and {R.shape}"
         )
 
-    def _one(
-        self, w: NDArray[np.float64], R: NDArray[np.float64], dT: float
-    ) -> NDArray[np.float64]:
-        """``w - bias - slopes dT - A @ (g @ R)`` for one sample, on floats (``dT``: the
+    def _one(self, w: NDArray[np.float64], s: tuple[float, ...], dT: float) -> NDArray[np.float64]:
+        """``w - bias - slopes dT - A @ s`` for one sample, on floats (``s``: the tool's
+        weight in the frame ``A`` acts on, ``g @ R`` or the accelerometer's; ``dT``: the
         temperature held to the calibrated range less the reference [degC], 0 without one)."""
-        g0, g1, g2 = self._g
-        (a0, a1, a2), (b0, b1, b2), (c0, c1, c2) = R.tolist()
-        s0, s1, s2 = (
-            g0 * a0 + g1 * b0 + g2 * c0,
-            g0 * a1 + g1 * b1 + g2 * c1,
-            g0 * a2 + g1 * b2 + g2 * c2,
-        )
+        s0, s1, s2 = s
         return np.array(
             [
                 x - b - k * dT - (k0 * s0 + k1 * s1 + k2 * s2)

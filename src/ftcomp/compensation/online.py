@@ -25,7 +25,9 @@ in the sensor frame, so RLS is the exact recursive form of the batch least squar
 :func:`~ftcomp.compensation.load.estimate_load`; with rows weighted by the sensor's noise
 variances its information matrix inverts to the parameters' covariance. A Kalman filter with a
 random-walk model would add nothing but a process noise to tune; the forgetting factor plays that
-role (time constant ``memory_s``).
+role (time constant ``memory_s``). With an accelerometer in the sensor (``specific_force_mps2``)
+``g d`` is the apparent gravity it reads, ``-f = g_s - a``: the load is weighed, and compensated,
+while the arm moves as well as when it is still.
 
 :class:`LoadTracker` follows a compensator call by call for a live log: the load columns of a
 row (:data:`LOAD_COLUMNS`) and the grasp, release and contact events (:class:`LoadEvent`) with
@@ -110,19 +112,21 @@ class OnlineSettings:
 class LoadRls:
     """Recursive least squares of a load's ``theta = (m [kg], m c [kg m])`` with forgetting.
 
+    Each row's regressor is the gravity the load feels, ``gamma`` [m/s^2] in the sensor frame:
+    gravity at the sensor's orientation, or, with an accelerometer in the sensor, its reading
+    negated (the apparent gravity ``g_s - a``, so a moving load weighs what it weighs).
+
     Information form: ``A <- lam A + H' W H``, ``b <- lam b + H' W y``, ``theta = A^-1 b``,
     covariance ``A^-1`` (rows weighted by the inverse noise variances ``W``). A weak prior
     (``theta = 0`` with standard deviation 1 kg, 1 kg m) keeps ``A`` invertible while the centre
     of gravity along gravity is not yet observable (one orientation only).
 
     Args:
-        gravity_mps2: gravity's magnitude [m/s^2].
         weights: inverse noise variances of the six wrench rows, shape (6,).
         forgetting: ``lam`` in (0, 1].
     """
 
-    def __init__(self, gravity_mps2: float, weights: NDArray[np.float64], forgetting: float):
-        self.g = gravity_mps2
+    def __init__(self, weights: NDArray[np.float64], forgetting: float):
         self.w = np.asarray(weights, dtype=float)
         self.lam = forgetting
         self.reset()
@@ -135,16 +139,17 @@ class LoadRls:
         self._cov: NDArray[np.float64] | None = None
         self.samples = 0
 
-    def regressor(self, d_sensor: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``H`` (6, 4): the load wrench ``H @ theta`` with gravity along ``d_sensor`` (unit)."""
+    @staticmethod
+    def regressor(gamma_sensor: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``H`` (6, 4): the load wrench ``H @ theta`` under gravity ``gamma_sensor`` [m/s^2]."""
         H = np.zeros((6, 4))
-        H[:3, 0] = self.g * d_sensor
-        H[3:, 1:] = -self.g * skew(d_sensor)
+        H[:3, 0] = gamma_sensor
+        H[3:, 1:] = -skew(gamma_sensor)
         return H
 
-    def update(self, d_sensor: NDArray[np.float64], wrench: NDArray[np.float64]) -> None:
-        """Add one compensated wrench (tool removed) seen with gravity along ``d_sensor``."""
-        H = self.regressor(d_sensor)
+    def update(self, gamma_sensor: NDArray[np.float64], wrench: NDArray[np.float64]) -> None:
+        """Add one compensated wrench (tool removed) seen under gravity ``gamma_sensor``."""
+        H = self.regressor(gamma_sensor)
         HtW = H.T * self.w
         self.A = self.lam * self.A + HtW @ H
         self.b = self.lam * self.b + HtW @ wrench
@@ -182,9 +187,9 @@ class LoadRls:
         J = np.hstack([-self.cog_m[:, None] / m, np.eye(3) / m])
         return np.asarray(J @ self.covariance @ J.T)
 
-    def predicted_std(self, d_sensor: NDArray[np.float64]) -> tuple[float, float]:
+    def predicted_std(self, gamma_sensor: NDArray[np.float64]) -> tuple[float, float]:
         """Largest standard deviation of the predicted load force [N] and torque [N m]."""
-        H = self.regressor(d_sensor)
+        H = self.regressor(gamma_sensor)
         C = H @ self.covariance @ H.T
         return float(math.sqrt(C[:3, :3].diagonal().max())), float(
             math.sqrt(C[3:, 3:].diagonal().max())
@@ -229,9 +234,7 @@ class OnlineLoadCompensator(GravityCompensator):
         # With a mount the orientations given are the recorded frame's: R_base_sensor = R @ this.
         self._R_rec_sensor = None if self.mount is None else self.mount.R_rec_sensor
         weights = np.array([1 / s.force_noise_std_N**2] * 3 + [1 / s.torque_noise_std_Nm**2] * 3)
-        self.rls = LoadRls(
-            STANDARD_GRAVITY_MPS2, weights, math.exp(-1.0 / (s.memory_s * s.rate_Hz))
-        )
+        self.rls = LoadRls(weights, math.exp(-1.0 / (s.memory_s * s.rate_Hz)))
         self._n_confirm = max(2, round(s.confirm_s * s.rate_Hz))
         self._alpha = 1.0 / (s.baseline_s * s.rate_Hz)
         self._ramp_step = 1.0 / max(1.0, s.ramp_s * s.rate_Hz)
@@ -257,14 +260,14 @@ class OnlineLoadCompensator(GravityCompensator):
         2): an event's ``sample - onset_sample`` is this minus one."""
         return self._n_confirm
 
-    def load_wrench(self, d_sensor: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The load wrench subtracted now, at gravity direction ``d_sensor``, (6,)."""
-        return self.blend * (self.rls.regressor(d_sensor) @ self.theta_used)
+    def load_wrench(self, gamma_sensor: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The load wrench subtracted now, under gravity ``gamma_sensor`` [m/s^2], (6,)."""
+        return self.blend * (self.rls.regressor(gamma_sensor) @ self.theta_used)
 
-    def gravity_dir_sensor(self, R_base_sensor: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Unit gravity direction in the sensor frame, (3,) (``R_base_sensor``: the sensor's
-        own orientation, the mount already applied)."""
-        return np.asarray(self._u @ R_base_sensor)
+    def gravity_sensor(self, R_base_sensor: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Gravity in the sensor frame [m/s^2], (3,) (``R_base_sensor``: the sensor's own
+        orientation, the mount already applied)."""
+        return np.asarray(STANDARD_GRAVITY_MPS2 * (self._u @ R_base_sensor))
 
     # ----------------------------------------------------------------- the cycle
     def compensate(
@@ -275,55 +278,69 @@ class OnlineLoadCompensator(GravityCompensator):
         out: NDArray[np.float64] | None = None,
         t_s: ArrayLike | None = None,
         temperature_C: ArrayLike | None = None,
+        specific_force_mps2: ArrayLike | None = None,
     ) -> NDArray[np.float64]:
         """Contact wrench with tool and (once converged) load removed [N, N*m], sensor frame.
 
         One sample, shape (6,) with (3, 3): advances the detector and estimator. A batch,
-        (N, 6) with (N, 3, 3): compensates with the current state only. ``out``, ``t_s`` and
-        ``temperature_C`` as in :meth:`GravityCompensator.compensate`.
+        (N, 6) with (N, 3, 3): compensates with the current state only. ``out``, ``t_s``,
+        ``temperature_C`` and ``specific_force_mps2`` as in
+        :meth:`GravityCompensator.compensate` (with an accelerometer the load too is weighed
+        and compensated under the apparent gravity it reads).
         """
         tool_only = super().compensate(
-            wrench_sensor, R_base_sensor, out=out, t_s=t_s, temperature_C=temperature_C
+            wrench_sensor,
+            R_base_sensor,
+            out=out,
+            t_s=t_s,
+            temperature_C=temperature_C,
+            specific_force_mps2=specific_force_mps2,
         )
         R = np.asarray(R_base_sensor, dtype=float)
         if self._R_rec_sensor is not None:
             R = R @ self._R_rec_sensor
         if tool_only.ndim == 2:
-            d = R.transpose(0, 2, 1) @ self._u
-            H = np.zeros((len(d), 6, 4))
-            H[:, :3, 0] = self.rls.g * d
-            H[:, 3:, 1:] = -self.rls.g * np.array([skew(x) for x in d])
+            gammas = (
+                STANDARD_GRAVITY_MPS2 * (R.transpose(0, 2, 1) @ self._u)
+                if specific_force_mps2 is None
+                else -np.asarray(specific_force_mps2, dtype=float)
+            )
+            H = np.array([self.rls.regressor(gamma) for gamma in gammas])
             tool_only -= self.blend * (H @ self.theta_used)
             return tool_only
         if not np.isfinite(tool_only).all():
             return tool_only  # garbage in: the loop's watchdog acts; the state is left alone
-        d = self.gravity_dir_sensor(R)
-        self._observe(d, tool_only)
+        gamma = (
+            self.gravity_sensor(R)
+            if specific_force_mps2 is None
+            else -np.asarray(specific_force_mps2, dtype=float)
+        )
+        self._observe(gamma, tool_only)
         self.samples += 1
-        return tool_only - self.load_wrench(d) if self.blend > 0.0 else tool_only
+        return tool_only - self.load_wrench(gamma) if self.blend > 0.0 else tool_only
 
-    def _observe(self, d: NDArray[np.float64], tool_only: NDArray[np.float64]) -> None:
+    def _observe(self, gamma: NDArray[np.float64], tool_only: NDArray[np.float64]) -> None:
         s = self.settings
         # The detector compares against the full load estimate (not the ramped one).
         residual = tool_only
         if self.state is GraspState.HOLDING:
-            residual = tool_only - self.rls.regressor(d) @ self.theta_used
+            residual = tool_only - self.rls.regressor(gamma) @ self.theta_used
         if self._baseline is None:
             self._baseline = residual.copy()
         if self.state is GraspState.ESTIMATING:
-            self.rls.update(d, tool_only)
-            fs, ts = self.rls.predicted_std(d)
+            self.rls.update(gamma, tool_only)
+            fs, ts = self.rls.predicted_std(gamma)
             if fs < s.converged_force_N and ts < s.converged_torque_Nm:
                 self.state = GraspState.HOLDING
                 self.theta_used = self.rls.theta.copy()
                 self.blend = 0.0
-                self._baseline = tool_only - self.rls.regressor(d) @ self.theta_used
+                self._baseline = tool_only - self.rls.regressor(gamma) @ self.theta_used
                 self._run = 0
                 return
         elif self.state is GraspState.HOLDING:
             self.blend = min(1.0, self.blend + self._ramp_step)
             if self._run == 0 and abs(residual[:3]).max() < 4.0 * s.force_noise_std_N:
-                self.rls.update(d, tool_only)  # refine while nothing touches the tool
+                self.rls.update(gamma, tool_only)  # refine while nothing touches the tool
                 self.theta_used = self.rls.theta.copy()
         step = residual[:3] - self._baseline[:3]
         if float(np.linalg.norm(step)) > s.step_force_N:
@@ -332,13 +349,13 @@ class OnlineLoadCompensator(GravityCompensator):
             if self._run >= self._n_confirm:
                 mean = self._sum / self._run
                 if float(np.linalg.norm(mean[:3] - self._baseline[:3])) > s.step_force_N:
-                    self._confirmed(d, mean)
+                    self._confirmed(gamma, mean)
                 self._run, self._sum = 0, np.zeros(6)
             return
         self._run, self._sum = 0, np.zeros(6)
         self._baseline += self._alpha * (residual - self._baseline)
 
-    def _confirmed(self, d: NDArray[np.float64], mean: NDArray[np.float64]) -> None:
+    def _confirmed(self, gamma: NDArray[np.float64], mean: NDArray[np.float64]) -> None:
         """A step persisted for the confirmation window: grasp, release or contact."""
         s = self.settings
         onset = self.samples - self._n_confirm + 1
@@ -346,6 +363,7 @@ class OnlineLoadCompensator(GravityCompensator):
         jump = mean[:3] - self._baseline[:3]
         if self.state is GraspState.EMPTY or self.state is GraspState.ESTIMATING:
             level = mean[:3]  # nothing subtracted but the tool in these states
+            d = gamma / max(float(np.linalg.norm(gamma)), 1e-9)  # gravity's direction
             along = float(level @ d)
             if along > s.step_force_N and along > s.grasp_cos * float(np.linalg.norm(level)):
                 self._start_estimate("grasp", onset)
@@ -355,11 +373,11 @@ class OnlineLoadCompensator(GravityCompensator):
                 self.events.append(GraspEvent("contact", self.samples, onset))
             self._baseline = mean.copy()
             return
-        tool_only_level = mean[:3] + self.rls.regressor(d)[:3] @ self.theta_used
+        tool_only_level = mean[:3] + self.rls.regressor(gamma)[:3] @ self.theta_used
         if float(np.linalg.norm(tool_only_level)) < max(
             s.step_force_N, 0.25 * float(np.linalg.norm(jump))
         ):
-            load = self.rls.regressor(d) @ self.theta_used
+            load = self.rls.regressor(gamma) @ self.theta_used
             self._empty("release", onset)
             self._baseline = mean + load  # the level without the load subtracted
             return

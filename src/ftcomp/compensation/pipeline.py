@@ -6,7 +6,9 @@ A live loop turns a raw reading into the contact wrench in one place,
 
 1. bias and tool gravity of the calibration (:class:`~ftcomp.compensation.compensator.
    GravityCompensator`; a bias that follows the sensor's temperature from each reading's
-   ``temperature_C`` channel), or with a grasped load weighed online that load's too
+   ``temperature_C`` channel; with ``accelerometer``, the tool's weight and linear inertial
+   force under the apparent gravity the sensor's IMU reads, ``accel_x_m_s2``...), or with a
+   grasped load weighed online that load's too
    (:class:`~ftcomp.compensation.online.OnlineLoadCompensator`, stateful: one call per reading,
    in time order; its load columns and events followed by a
    :class:`~ftcomp.compensation.online.LoadTracker`);
@@ -37,7 +39,7 @@ from ftcomp.compensation.bias_tracking import BiasTracker
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.compensation.online import LoadTracker, OnlineLoadCompensator, OnlineSettings
 from ftcomp.errors import ParameterError
-from ftcomp.hardware.protocols import TEMPERATURE_CHANNEL
+from ftcomp.hardware.protocols import IMU_CHANNELS, TEMPERATURE_CHANNEL
 from ftcomp.model import GravityModel
 
 __all__ = ["MEASURE_RATE_S", "MIN_RATE_READINGS", "Compensated", "WrenchPipeline"]
@@ -87,10 +89,15 @@ class WrenchPipeline:
         extra_channels: the sensor's extra channels, in the order of each reading's
             ``extras`` (:attr:`~ftcomp.hardware.protocols.ReportsExtraChannels.extra_channels`):
             a calibration whose bias follows the temperature takes ``temperature_C`` from them.
+        accelerometer: take the tool's (and a weighed load's) acceleration from the sensor's
+            accelerometer channels (``accel_x_m_s2``, ``accel_y_m_s2``, ``accel_z_m_s2``:
+            :meth:`~ftcomp.compensation.compensator.GravityCompensator.compensate`'s
+            ``specific_force_mps2``) rather than hold it still at the pose's gravity.
 
     Raises:
         ParameterError: a bias tracker without a compensator; a calibration whose bias follows
-            the sensor's temperature with a sensor that reports none.
+            the sensor's temperature with a sensor that reports none; ``accelerometer`` with a
+            sensor that reports no acceleration.
 
     Attributes:
         load: follows the online compensator's estimate and events (None without one).
@@ -104,10 +111,13 @@ class WrenchPipeline:
         *,
         bias_tracker: BiasTracker | None = None,
         extra_channels: tuple[str, ...] = (),
+        accelerometer: bool = False,
     ) -> None:
         if bias_tracker is not None and compensator is None:
             raise ParameterError("tracking the bias needs the tool's calibration")
         self.extra_channels = extra_channels
+        #: Where each reading's acceleration is in its extras (None: not used).
+        self._accel_at = _accelerometer_indices(extra_channels) if accelerometer else None
         #: Where each reading's temperature is in its extras (None: not used).
         self._temperature_at = _temperature_index(compensator, extra_channels)
         #: The lowest and highest temperature compensated with [degC] (inf, -inf: none).
@@ -134,6 +144,7 @@ class WrenchPipeline:
         settings: OnlineSettings | None = None,
         measure_s: float = MEASURE_RATE_S,
         extra_channels: tuple[str, ...] = (),
+        accelerometer: bool = False,
     ) -> WrenchPipeline:
         """A pipeline weighing a grasped load online (no bias tracking).
 
@@ -145,11 +156,12 @@ class WrenchPipeline:
             settings: the compensator's tuning; its ``rate_Hz`` is replaced by the rate
                 (default :class:`~ftcomp.compensation.online.OnlineSettings`).
             measure_s: how long to measure the rate [s].
-            extra_channels: the sensor's extra channels (as :class:`WrenchPipeline`'s).
+            extra_channels, accelerometer: as :class:`WrenchPipeline`'s.
 
         Raises:
-            ParameterError: a weightless tool, a rate that is not > 0, or a calibration whose
-                bias follows the temperature with a sensor that reports none.
+            ParameterError: a weightless tool, a rate that is not > 0, a calibration whose
+                bias follows the temperature with a sensor that reports none, or
+                ``accelerometer`` with a sensor that reports no acceleration.
         """
         if rate_Hz is not None and not (math.isfinite(rate_Hz) and rate_Hz > 0.0):
             raise ParameterError(f"the readings' rate must be > 0 Hz, got {rate_Hz:g}")
@@ -158,10 +170,11 @@ class WrenchPipeline:
             return cls(
                 OnlineLoadCompensator(calibration, replace(settings, rate_Hz=rate_Hz)),
                 extra_channels=extra_channels,
+                accelerometer=accelerometer,
             )
         # refuses a weightless tool, or a temperature model without a temperature, now
         _temperature_index(OnlineLoadCompensator(calibration, settings), extra_channels)
-        pipeline = cls(extra_channels=extra_channels)
+        pipeline = cls(extra_channels=extra_channels, accelerometer=accelerometer)
         pipeline._weigh = (calibration, settings, round(measure_s * 1e9))
         return pipeline
 
@@ -189,18 +202,25 @@ class WrenchPipeline:
         tracker keep state); a pipeline still measuring its rate has no compensator yet."""
         if self._weigh is not None:
             raise ParameterError("the online load estimate's rate is still being measured")
-        c, at = self.compensator, self._temperature_at
+        c, at, acc = self.compensator, self._temperature_at, self._accel_at
         if c is None:
             contact = wrench_sensor
-        elif at is None:
+        elif at is None and acc is None:
             contact = c.compensate(wrench_sensor, R_base_sensor)
-        else:  # the bias at this reading's temperature
-            temperature = extras[at]
-            if temperature < self._T_low:
-                self._T_low = temperature
-            if temperature > self._T_high:
-                self._T_high = temperature
-            contact = c.compensate(wrench_sensor, R_base_sensor, temperature_C=temperature)
+        else:
+            temperature = None
+            if at is not None:  # the bias at this reading's temperature
+                temperature = extras[at]
+                if temperature < self._T_low:
+                    self._T_low = temperature
+                if temperature > self._T_high:
+                    self._T_high = temperature
+            contact = c.compensate(
+                wrench_sensor,
+                R_base_sensor,
+                temperature_C=temperature,
+                specific_force_mps2=None if acc is None else [extras[i] for i in acc],
+            )
         tracker = self.bias_tracker
         if tracker is not None:  # the bias followed while still and free
             contact = tracker.correct(t_ns * 1e-9, contact, R_base_sensor)
@@ -283,6 +303,20 @@ class WrenchPipeline:
         held, self._held = self._held, []
         for reading in held:
             self._push(*reading)
+
+
+def _accelerometer_indices(extra_channels: tuple[str, ...]) -> tuple[int, int, int]:
+    """Where a reading's acceleration (x, y, z) is among its extras; a sensor that reports
+    none is a ParameterError."""
+    wanted = IMU_CHANNELS[:3]
+    if not all(name in extra_channels for name in wanted):
+        reported = ", ".join(extra_channels) if extra_channels else "none"
+        raise ParameterError(
+            f"accelerometer: the sensor reports no acceleration ({', '.join(wanted)}; its extra "
+            f"channels: {reported})"
+        )
+    x, y, z = (extra_channels.index(name) for name in wanted)
+    return x, y, z
 
 
 def _temperature_index(

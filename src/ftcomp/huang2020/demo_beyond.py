@@ -163,6 +163,8 @@ class InertialMetrics:
             "static_rms_force_error_N": fast.static_rms_N,
             "inertial_rms_force_error_N": fast.inertial_rms_N,
             "ratio": fast.ratio,
+            "imu_linear_rms_force_error_N": fast.imu_linear_rms_N,
+            "imu_inertial_rms_force_error_N": fast.imu_inertial_rms_N,
             "static_rms_force_error_unfiltered_N": fast.static_rms_raw_N,
             "inertial_rms_force_error_unfiltered_N": fast.inertial_rms_raw_N,
             "evaluation_filter": {"window_s": EVALUATION_FILTER[0], "order": EVALUATION_FILTER[1]},
@@ -373,6 +375,20 @@ def _fast_part(out: Path, fast: FastMoveRun) -> tuple[InertialMetrics, Table, Fi
             "≤ 20 %",
             f"{fast.inertial_rms_N:.3f} / {fast.static_rms_N:.3f} N = {100 * fast.ratio:.1f} %",
             Mark("yes" if good else "no", "good" if good else "bad"),
+        ],
+        [
+            "the same with an IMU: the accelerometer's apparent gravity / static only",
+            "-",
+            f"{fast.imu_linear_rms_N:.3f} / {fast.static_rms_N:.3f} N = "
+            f"{100 * fast.imu_linear_rms_N / fast.static_rms_N:.1f} %",
+            Mark("", "note"),
+        ],
+        [
+            "the same with an IMU: the inertial wrench of its motion / static only",
+            "-",
+            f"{fast.imu_inertial_rms_N:.3f} / {fast.static_rms_N:.3f} N = "
+            f"{100 * fast.imu_inertial_rms_N / fast.static_rms_N:.1f} %",
+            Mark("", "note"),
         ],
         *(
             [f"{name} [kg·m²]", f"truth {tv:.3e}", f"{v:.3e} ± {e:.1e}", Mark("", "note")]

@@ -310,6 +310,10 @@ class RunConfig:
             (:class:`~ftcomp.compensation.bias_tracking.BiasTracker`; not with
             ``online_load``). A steady contact lighter than its contact thresholds cannot be
             told from a bias change: keep it off for a run that presses less than that.
+        accelerometer: take the tool's (and a weighed load's) acceleration from the sensor's
+            accelerometer (a sensor that reports ``accel_x_m_s2``...: an IMU's), so a moving
+            tool's linear inertial force is compensated too
+            (:class:`~ftcomp.compensation.pipeline.WrenchPipeline`).
     """
 
     admittance: AdmittanceConfig
@@ -325,6 +329,7 @@ class RunConfig:
     )
     online_load: bool = False
     track_bias: BiasTrackingConfig | None = None
+    accelerometer: bool = False
 
     def __post_init__(self) -> None:
         if self.track_bias is not None and self.online_load:
@@ -486,10 +491,18 @@ def run_compliant(
     # (a sensor without them is refused here, before the robot is taken)
     channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
     pipeline = (  # weighing: one call per cycle
-        WrenchPipeline.weighing(calibration, 1.0 / period_s, extra_channels=channels)
+        WrenchPipeline.weighing(
+            calibration,
+            1.0 / period_s,
+            extra_channels=channels,
+            accelerometer=config.accelerometer,
+        )
         if config.online_load
         else WrenchPipeline(
-            GravityCompensator(calibration), bias_tracker=tracker, extra_channels=channels
+            GravityCompensator(calibration),
+            bias_tracker=tracker,
+            extra_channels=channels,
+            accelerometer=config.accelerometer,
         )
     )
     if isinstance(robot, TakesControl) and not config.dry_run:

@@ -180,6 +180,10 @@ class StreamConfig:
         track_bias: let the bias follow the sensor while the arm is still and free
             (:class:`~ftcomp.compensation.bias_tracking.BiasTracker`; needs a calibration, not
             with ``online_load``); None: the calibration's bias.
+        accelerometer: take the tool's (and a weighed load's) acceleration from the sensor's
+            accelerometer (a sensor that reports ``accel_x_m_s2``...: an IMU's), so a moving
+            tool's linear inertial force is compensated too
+            (:class:`~ftcomp.compensation.pipeline.WrenchPipeline`).
     """
 
     duration_s: float = param(gt=0.0, unit="s", help="how long to log")
@@ -195,6 +199,7 @@ class StreamConfig:
     )
     progress_period_s: float = param(0.25, gt=0.0, unit="s", help="how often to call on_progress")
     track_bias: BiasTrackingConfig | None = None
+    accelerometer: bool = False
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -360,11 +365,21 @@ def stream(
     channels = sensor.extra_channels if isinstance(sensor, ReportsExtraChannels) else ()
     if config.online_load and calibration is not None:
         pipeline = WrenchPipeline.weighing(
-            calibration, config.online_rate_hz, extra_channels=channels
+            calibration,
+            config.online_rate_hz,
+            extra_channels=channels,
+            accelerometer=config.accelerometer,
         )
     else:
         compensator = GravityCompensator(calibration) if calibration is not None else None
-        pipeline = WrenchPipeline(compensator, bias_tracker=tracker, extra_channels=channels)
+        if config.accelerometer and compensator is None:
+            raise ParameterError("accelerometer: compensating with it needs the tool's calibration")
+        pipeline = WrenchPipeline(
+            compensator,
+            bias_tracker=tracker,
+            extra_channels=channels,
+            accelerometer=config.accelerometer,
+        )
     online = config.online_load
     columns = stream_columns(
         with_pose=with_pose,

@@ -1,5 +1,6 @@
-"""The simulator's truth of the sensor frame's motion (to check kinematics computed from poses)
-and of the tool's inertia tensor (to score its identification).
+"""The simulator's truth of the sensor frame's motion (to check kinematics computed from poses),
+of what an accelerometer in the sensor reads, and of the tool's inertia tensor (to score its
+identification).
 
 MuJoCo's ``mj_objectAcceleration`` gives a body's acceleration *minus* gravity (what an
 accelerometer feels); :func:`true_sensor_motion` adds gravity back, so that its linear
@@ -16,7 +17,7 @@ from numpy.typing import NDArray
 from ftcomp.sim.cell import SimCell
 from ftcomp.sim.scene import NAMES
 
-__all__ = ["true_sensor_motion", "true_tool_inertia"]
+__all__ = ["true_sensor_motion", "true_specific_force", "true_tool_inertia"]
 
 
 def true_sensor_motion(cell: SimCell) -> NDArray[np.float64]:
@@ -34,6 +35,17 @@ def true_sensor_motion(cell: SimCell) -> NDArray[np.float64]:
     R_world_sensor = d.site_xmat[site].reshape(3, 3)
     accel = acc[3:] + R_world_sensor.T @ m.opt.gravity
     return np.concatenate([accel, vel[:3], acc[:3]])
+
+
+def true_specific_force(cell: SimCell) -> NDArray[np.float64]:
+    """What an accelerometer at the sensor frame's origin, on its axes, reads [m/s^2], (3,):
+    the specific force, the origin's acceleration less gravity (of the same state as
+    :func:`true_sensor_motion`)."""
+    m, d = cell.model, cell.data
+    acc = np.empty(6)
+    site = m.site(NAMES["ft_site"]).id
+    mujoco.mj_objectAcceleration(m, d, mujoco.mjtObj.mjOBJ_SITE, site, acc, 1)
+    return acc[3:].copy()
 
 
 def true_tool_inertia(cell: SimCell) -> NDArray[np.float64]:
