@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 from ftcomp.calibration.identify import calibrate
 from ftcomp.calibration_record import BiasDrift, Calibration
 from ftcomp.compensation.compensator import GravityCompensator
-from ftcomp.errors import ParameterError
+from ftcomp.errors import InputFileError, ParameterError
 from ftcomp.io.calibration_json import save_calibration
 from ftcomp.io.samples_csv import read_samples
 from ftcomp.session.compensate_file import (
@@ -159,3 +159,32 @@ def test_compensate_reports_its_progress_up_to_the_whole_input(
     assert len(calls) > 3 and done == sorted(done)
     whole = 3000 if suffix == ".parquet" else src.stat().st_size
     assert {t for _, t in calls} == {whole} and done[-1] == whole
+
+
+def test_the_accelerometer_columns_give_each_row_its_tools_acceleration(
+    tmp_path: Path, rng: np.random.Generator, calibration: Calibration
+) -> None:
+    src, out = tmp_path / "rec.csv", tmp_path / "out.csv"
+    write_recording(src, rng, 300)
+    accel = rng.normal(0.0, 3.0, (300, 3)) + np.array([0.0, 0.0, -9.8])
+    lines = src.read_text().splitlines()
+    rows = [
+        f"{line},{a[0]:.6f},{a[1]:.6f},{a[2]:.6f}" for line, a in zip(lines[1:], accel, strict=True)
+    ]
+    header = lines[0] + ",accel_x_m_s2,accel_y_m_s2,accel_z_m_s2"
+    src.write_text("\n".join([header, *rows]) + "\n")
+    compensate_file(src, out, calibration, CompensateConfig(accelerometer=True, overwrite=True))
+    samples = read_samples(src)
+    expected = GravityCompensator(calibration).compensate(
+        samples.wrench_sensor, samples.R_base_sensor, specific_force_mps2=np.round(accel, 6)
+    )
+    written = pcsv.read_csv(out)
+    got = np.column_stack([written.column(c).to_numpy() for c in EXTRA_COLUMNS[:6]])
+    np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-9)
+    # Each refusal names the file, and the row and column of a bad cell.
+    src.write_text("\n".join([header, *rows[:5], rows[5].rsplit(",", 1)[0] + ",x"]) + "\n")
+    with pytest.raises(InputFileError, match=r"row 6, column 'accel_z_m_s2': 'x' is not a finite"):
+        compensate_file(src, out, calibration, CompensateConfig(accelerometer=True, overwrite=True))
+    write_recording(src, rng, 10)
+    with pytest.raises(ParameterError, match=r"rec.csv: accelerometer: .* no 'accel_x_m_s2'"):
+        compensate_file(src, out, calibration, CompensateConfig(accelerometer=True, overwrite=True))

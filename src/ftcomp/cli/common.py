@@ -80,15 +80,19 @@ def warn_live_drift(calibration: Calibration, path: str, *, tracking: bool = Fal
         )
 
 
-def add_accelerometer_argument(parser: argparse.ArgumentParser) -> None:
+def add_accelerometer_argument(
+    parser: argparse.ArgumentParser,
+    source: str = "a sensor with an IMU: Bota through bota-driver",
+) -> None:
     """``--accelerometer``: the tool's (and a weighed load's) acceleration from the sensor's
-    IMU (the run's and the stream's ``accelerometer`` field)."""
+    IMU (the ``accelerometer`` field of the run's, the stream's and compensate's configs;
+    ``source``: where the readings come from, for the help)."""
     parser.add_argument(
         "--accelerometer",
         action="store_true",
         help="take the tool's acceleration (and a grasped load's) from the sensor's "
-        "accelerometer, so a moving tool's inertial force is compensated too (a sensor with an "
-        "IMU: Bota through bota-driver; default: off, the tool held still at its pose's gravity)",
+        f"accelerometer, so a moving tool's inertial force is compensated too ({source}; "
+        "default: off, the tool held still at its pose's gravity)",
     )
 
 

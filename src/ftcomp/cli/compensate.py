@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from ftcomp.cli.common import add_range_argument, print_warnings
+from ftcomp.cli.common import add_accelerometer_argument, add_range_argument, print_warnings
 from ftcomp.cli.live_status import CallbackProgress
 from ftcomp.session.compensate_file import EXTRA_COLUMNS
 
@@ -46,6 +46,7 @@ def register(parser: argparse.ArgumentParser) -> None:
         "[N, N·m] and load_weight_N [N] (required; never the input file)",
     )
     add_range_argument(parser)
+    add_accelerometer_argument(parser, "the rows' accel_x_m_s2, accel_y_m_s2, accel_z_m_s2")
     parser.add_argument(
         "--json",
         action="store_true",
@@ -64,7 +65,10 @@ def run(args: argparse.Namespace) -> int:
 
     force_range, torque_range = args.range if args.range else (None, None)
     config = CompensateConfig(
-        force_range_N=force_range, torque_range_Nm=torque_range, overwrite=args.force
+        force_range_N=force_range,
+        torque_range_Nm=torque_range,
+        overwrite=args.force,
+        accelerometer=args.accelerometer,
     )
     parquet = str(args.samples).lower().endswith(".parquet")
     bar = CallbackProgress("rows read" if parquet else "MB read", 1.0 if parquet else 1e6)

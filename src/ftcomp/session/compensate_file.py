@@ -21,7 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, BinaryIO
+from typing import TYPE_CHECKING, BinaryIO, Final
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,7 +31,7 @@ from ftcomp.calibration_record import Calibration, TemperatureBiasDrift
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.config_fields import check_fields, param
 from ftcomp.errors import InputFileError, ParameterError
-from ftcomp.hardware.protocols import TEMPERATURE_CHANNEL
+from ftcomp.hardware.protocols import IMU_CHANNELS, TEMPERATURE_CHANNEL
 from ftcomp.io.atomic import atomic_output, check_writable
 from ftcomp.io.calibration_json import load_calibration
 from ftcomp.io.numtext import format_rows
@@ -61,6 +61,9 @@ class CompensateConfig:
         overwrite: whether an existing output may be replaced (never the input).
         csv_chunk_bytes: bytes of a CSV input read per block (None: the reader's default).
         parquet_batch_rows: rows of a Parquet input read per block (None: the reader's default).
+        accelerometer: take the tool's acceleration from the rows' accelerometer columns
+            (``accel_x_m_s2``.., an IMU's in the sensor: the tool's weight under the apparent
+            gravity they read, :class:`~ftcomp.compensation.compensator.GravityCompensator`).
     """
 
     force_range_N: float | None = param(
@@ -76,6 +79,7 @@ class CompensateConfig:
     parquet_batch_rows: int | None = param(
         None, gt=0, integer=True, optional=True, help="rows of a Parquet input read per block"
     )
+    accelerometer: bool = False
 
     def __post_init__(self) -> None:
         check_fields(self)
@@ -139,20 +143,38 @@ class _Totals:
 
 
 def _extra(
-    block: SampleBlock, compensator: GravityCompensator, totals: _Totals, source: str
+    block: SampleBlock,
+    compensator: GravityCompensator,
+    totals: _Totals,
+    source: str,
+    accelerometer: bool,
 ) -> NDArray[np.float64]:
-    """The block's contact wrench and load weight, shape (N, 7)."""
+    """The block's contact wrench and load weight, shape (N, 7) (``accelerometer``: the tool's
+    acceleration from the block's accelerometer columns)."""
     extra = np.empty((len(block), 7))
     t_s = block.t if compensator.time_drift is not None else None
     if t_s is not None and len(t_s):
         totals.t_min = min(totals.t_min, float(t_s.min()))
         totals.t_max = max(totals.t_max, float(t_s.max()))
-    temperature = _temperatures(block, source) if compensator.needs_temperature else None
+    temperature = (
+        _finite_column(block, TEMPERATURE_CHANNEL, source, _TEMPERATURE_IS)
+        if compensator.needs_temperature
+        else None
+    )
     if temperature is not None and len(temperature):
         totals.T_min = min(totals.T_min, float(temperature.min()))
         totals.T_max = max(totals.T_max, float(temperature.max()))
+    specific_force = (
+        np.column_stack([_finite_column(block, c, source, _ACCELERATION_IS) for c in _ACCEL])
+        if accelerometer
+        else None
+    )
     contact = compensator.compensate(
-        block.wrench_sensor, block.R_base_sensor, t_s=t_s, temperature_C=temperature
+        block.wrench_sensor,
+        block.R_base_sensor,
+        t_s=t_s,
+        temperature_C=temperature,
+        specific_force_mps2=specific_force,
     )
     extra[:, :6] = contact
     np.sqrt(np.einsum("ij,ij->i", contact[:, :3], contact[:, :3]), out=extra[:, 6])
@@ -160,12 +182,21 @@ def _extra(
     return extra
 
 
-def _temperatures(block: SampleBlock, source: str) -> NDArray[np.float64]:
-    """The block's ``temperature_C`` column [degC], (N,), each a finite number (else an
-    InputFileError naming the row)."""
+#: The accelerometer's columns, x y z [m/s^2].
+_ACCEL: Final = IMU_CHANNELS[:3]
+#: What each of these columns' cells must be, for the message of one that is not.
+_TEMPERATURE_IS: Final = (
+    "a finite temperature [degC] (the calibration's bias follows the sensor's temperature)"
+)
+_ACCELERATION_IS: Final = "a finite acceleration [m/s^2] (accelerometer)"
+
+
+def _finite_column(block: SampleBlock, name: str, source: str, what: str) -> NDArray[np.float64]:
+    """The block's column ``name``, (N,), each a finite number (else an InputFileError naming
+    the row and saying it is not ``what``)."""
     import pyarrow as pa
 
-    column = block.table.column(TEMPERATURE_CHANNEL)
+    column = block.table.column(name)
     try:
         values = np.asarray(column.cast(pa.float64()).to_numpy(zero_copy_only=False), float)
     except (pa.ArrowException, ValueError):
@@ -174,9 +205,8 @@ def _temperatures(block: SampleBlock, source: str) -> NDArray[np.float64]:
     if bad.size:
         k = int(bad[0])
         raise InputFileError(
-            f"{source}, row {block.first_row + k}, column {TEMPERATURE_CHANNEL!r}: "
-            f"{column[k].as_py()!r} is not a finite temperature [degC] (the calibration's "
-            "bias follows the sensor's temperature)"
+            f"{source}, row {block.first_row + k}, column {name!r}: {column[k].as_py()!r} "
+            f"is not {what}"
         )
     return values
 
@@ -226,6 +256,7 @@ def _write(
     output: Path,
     to_parquet: bool,
     progress: Callable[[int], None],
+    accelerometer: bool,
 ) -> _Totals:
     """Compensate every block of ``reader`` into ``output``, atomically; ``progress`` is told
     how far the input has been read after each block (bytes of a CSV, rows of Parquet)."""
@@ -238,7 +269,7 @@ def _write(
 
             with ParquetBlockWriter(handle) as writer:
                 for block in read_ahead(reader.blocks()):
-                    extra = _extra(block, compensator, totals, reader.source)
+                    extra = _extra(block, compensator, totals, reader.source, accelerometer)
                     table = block.table
                     for j, name in enumerate(EXTRA_COLUMNS):
                         table = table.append_column(name, pa.array(extra[:, j]))
@@ -251,7 +282,8 @@ def _write(
             )
             handle.write(header.getvalue().encode("utf-8"))
             for block in read_ahead(reader.blocks()):
-                _csv_block(handle, block, _extra(block, compensator, totals, reader.source))
+                extra = _extra(block, compensator, totals, reader.source, accelerometer)
+                _csv_block(handle, block, extra)
                 progress(block.byte_range[1] if block.byte_range else totals.rows)
     return totals
 
@@ -337,7 +369,8 @@ def compensate_file(
     to_parquet = out.suffix.lower() == ".parquet"
     drift = calibration.bias_drift
     heat = isinstance(drift, TemperatureBiasDrift)
-    with _open(source, config, to_parquet=to_parquet, columns=heat) as reader:
+    columns = heat or config.accelerometer
+    with _open(source, config, to_parquet=to_parquet, columns=columns) as reader:
         clash = [c for c in EXTRA_COLUMNS if c in reader.layout.header]
         if clash:
             raise ParameterError(
@@ -348,6 +381,12 @@ def compensate_file(
                 f"{reader.source}: the calibration's bias follows the sensor's temperature "
                 f"(bias_drift temperature), applied from each row's temperature: the file has "
                 f"no {TEMPERATURE_CHANNEL!r} column"
+            )
+        missing = [c for c in _ACCEL if c not in reader.layout.header]
+        if config.accelerometer and missing:
+            raise ParameterError(
+                f"{reader.source}: accelerometer: the tool's acceleration is read from each "
+                f"row's {', '.join(_ACCEL)}: the file has no {missing[0]!r} column"
             )
         if drift is not None and not heat and not reader.layout.has_t:
             raise ParameterError(
@@ -360,7 +399,8 @@ def compensate_file(
             if progress is not None:
                 progress(n, size)
 
-        totals = _write(reader, GravityCompensator(calibration), out, to_parquet, done)
+        compensator = GravityCompensator(calibration)
+        totals = _write(reader, compensator, out, to_parquet, done, config.accelerometer)
     warnings = list(reader.warnings)
     t_range = (
         (totals.t_min, totals.t_max) if drift is not None and not heat and totals.rows else None
