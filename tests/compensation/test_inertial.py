@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 from tests.compensation.test_kinematics import analytic_path
 
+from ftcomp.calibration.identify import calibrate
+from ftcomp.calibration_record import MountRotation
 from ftcomp.compensation.compensator import GravityCompensator
 from ftcomp.compensation.inertial import InertialCompensator
 from ftcomp.constants import STANDARD_GRAVITY_MPS2
@@ -16,6 +21,8 @@ from ftcomp.model import GravityModel
 from ftcomp.sim.cell import HOME_Q_RAD, SimCell
 from ftcomp.sim.scene import SceneConfig
 from ftcomp.sim.sensor import SensorSpec
+
+from conftest import synthetic_samples
 
 TOOL = GravityModel(
     3.2,
@@ -103,3 +110,33 @@ def test_the_whole_inertial_wrench_from_an_imu_compensates_a_turning_tool() -> N
     # at most 0.33 kg * 0.05 m * 5e-3 ~ 1e-4 N and |I| 5e-3 ~ 5e-6 N*m.
     np.testing.assert_allclose(out[inner, :3], 0.0, atol=2e-4)
     np.testing.assert_allclose(out[inner, 3:], 0.0, atol=2e-5)
+
+
+def test_still_the_accelerometer_gives_what_the_pose_does_through_a_mount(
+    rng: np.random.Generator,
+) -> None:
+    # A calibration recorded in the flange's frame, its sensor turned in it: at rest the
+    # accelerometer reads gravity's opposite in the *sensor's* axes, and must give the same
+    # contact wrench as the flange's orientation does through the mount.
+    calibration = calibrate(synthetic_samples(rng))
+    rotvec = np.array([0.1, -0.3, 1.2])
+    R_rec_sensor = Rotation.from_rotvec(rotvec).as_matrix()
+    mounted = dataclasses.replace(
+        calibration, mount=MountRotation("full", R_rec_sensor, rotvec, np.zeros(3))
+    )
+    compensator = GravityCompensator(mounted)
+    R_base_rec = Rotation.random(20, rng=rng).as_matrix()
+    R_base_sensor = R_base_rec @ R_rec_sensor
+    gravity = calibration.model.gravity_base_N / compensator.mass_kg
+    f = -np.einsum("nji,j->ni", R_base_sensor, gravity)
+    readings = rng.normal(0.0, 5.0, (20, 6))
+    np.testing.assert_allclose(
+        compensator.compensate(readings, R_base_rec, specific_force_mps2=f),
+        compensator.compensate(readings, R_base_rec),
+        atol=1e-9,
+    )
+    np.testing.assert_allclose(
+        compensator.compensate(readings[3], R_base_rec[3], specific_force_mps2=f[3]),
+        compensator.compensate(readings[3], R_base_rec[3]),
+        atol=1e-9,
+    )
