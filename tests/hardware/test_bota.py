@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
 
+from ftcomp.constants import STANDARD_GRAVITY_MPS2
 from ftcomp.errors import HardwareError, ParameterError
 from ftcomp.hardware.bota import (
     DRIVER_CHANNELS,
@@ -31,6 +32,7 @@ from ftcomp.hardware.fixed import FixedRobot
 from ftcomp.hardware.protocols import ReportsExtraChannels
 from ftcomp.hardware.registry import open_robot, open_sensor
 from ftcomp.io.samples_csv import read_samples
+from ftcomp.model import GravityModel
 from ftcomp.paper import paper_poses
 from ftcomp.ros2.mcap_log import SessionMcapLog
 from ftcomp.session.pose_record import WrenchTolerance
@@ -299,3 +301,30 @@ def test_a_stream_of_bota_dummy_logs_its_temperature_and_imu_columns(tmp_path: P
         ]
     )
     np.testing.assert_allclose(imu, accel, rtol=1e-9)  # the CSV's 10 significant digits
+
+
+@pytest.mark.skipif(
+    importlib.util.find_spec("bota_driver") is None,
+    reason="bota-driver (Bota's binary client) has no wheel for this platform",
+)
+def test_with_the_accelerometer_each_row_of_bota_dummy_is_compensated_by_its_own_imu(
+    tmp_path: Path,
+) -> None:
+    # A 0.51 kg tool 5 cm down the sensor's z: each row's contact wrench is its reading less
+    # the tool under the apparent gravity of that row's accelerometer (the vendor's frames).
+    tool = GravityModel(
+        5.0, np.array([0.0, 0.0, 0.05]), np.zeros(3), np.zeros(3), tilt_U_rad=0.0, tilt_V_rad=0.0
+    )
+    config = StreamConfig(0.5, accelerometer=True)
+    fixed = "fixed://?rate_hz=500&rpy_deg=180,0,0"  # a pose (compensation needs one), tool down
+    with open_sensor("bota://dummy") as sensor, open_robot(fixed) as robot:
+        stream(robot, sensor, config, tmp_path / "s.csv", calibration=tool)
+    header = (tmp_path / "s.csv").read_text().splitlines()[0].split(",")
+    rows = np.loadtxt(tmp_path / "s.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert len(rows) > 50
+    raw = rows[:, header.index("fx") : header.index("tz") + 1]
+    contact = rows[:, header.index("cfx") : header.index("ctz") + 1]
+    f = rows[:, header.index("accel_x_m_s2") : header.index("accel_z_m_s2") + 1]
+    weight = -(5.0 / STANDARD_GRAVITY_MPS2) * f
+    expected = raw - np.hstack([weight, np.cross([0.0, 0.0, 0.05], weight)])
+    np.testing.assert_allclose(contact, expected, rtol=1e-8, atol=1e-8)  # 10 digits in the CSV
