@@ -92,11 +92,11 @@ def test_the_logged_estimate_is_the_estimators_own(rng: np.random.Generator) -> 
     """The log's columns are computed on floats for speed: the same numbers as ``LoadRls``'s
     (exact algebra, to rounding)."""
     weights = 1.0 / np.repeat([0.125, 0.003], 3) ** 2
-    rls = LoadRls(STANDARD_GRAVITY_MPS2, weights, 0.9999)
+    rls = LoadRls(weights, 0.9999)
     theta = np.array([LOAD_KG, *(LOAD_KG * LOAD_COG_M)])
     for R in Rotation.random(30, rng=rng).as_matrix():
-        d = R.T @ np.array([0.0, 0.0, -1.0])
-        rls.update(d, rls.regressor(d) @ theta + rng.normal(size=6) * NOISE)
+        gamma = R.T @ np.array([0.0, 0.0, -STANDARD_GRAVITY_MPS2])
+        rls.update(gamma, rls.regressor(gamma) @ theta + rng.normal(size=6) * NOISE)
     mass, std, cx, cy, cz, c_std = estimate_columns(rls)
     assert np.allclose([mass, std], [rls.mass_kg, rls.mass_std_kg], rtol=1e-12, atol=0.0)
     assert np.allclose([cx, cy, cz], rls.cog_m, rtol=1e-12, atol=0.0)
