@@ -1,15 +1,18 @@
 """The documented first session from random start configurations of the UR5e twin (issue 34).
 
-For each start: ``ftcomp twin --start-q-deg Q --tilt-deg U,V --truth truth.json`` (wrist 3
-anywhere within +-150 deg of the twin's home, the other joints 12 to 40 deg from it either side,
-the base tilted up to 1.5 deg each way), then, every command at its defaults, ``poses design
---count 9 --robot ur://H`` -> ``record --robot ur://H --sensor netft://S --poses poses.csv`` ->
-``calibrate``; a start passes when all three exit 0, the sample file holds 9 poses and every
-identified number is within 4.06 of its standard errors of the truth (the family bound of
-tests/devices/test_conformance.py). tests/twin/test_first_session_from_any_start.py runs three
-of these starts (seeds 1-3).
+For each start: ``ftcomp twin --start-q-deg Q --tilt-deg U,V --seed N --sensor FACE --truth
+truth.json`` (wrist 3 anywhere within +-150 deg of the twin's home, the other joints 12 to 40
+deg from it either side, the base tilted up to 1.5 deg each way, the sensor's noise drawn from
+the start's seed; ``--sensor`` a sensor face of the twin, the Net F/T by default), then, every
+command at its defaults, ``poses design --count 9 --robot ur://H`` -> ``record --robot ur://H
+--sensor URI --poses poses.csv`` -> ``calibrate``; a start passes when all three exit 0, the
+sample file holds 9 poses and every identified number is within 4.06 of its standard errors of
+the truth (the family bound of tests/devices/test_conformance.py).
+tests/twin/test_first_session_from_any_start.py runs three of these starts (seeds 1-3, its noise
+the twin's default seed).
 
     python bench/bench_first_session.py --starts 20        # seeds 1..20
+    python bench/bench_first_session.py --starts 6 --sensor ft300-rtu   # a 100 Hz FT 300
 
 Prints one line per start and the count: ``20/20 sessions completed with 9 poses, every
 calibration within its family bound``. Exit 1 if any start failed.
@@ -54,7 +57,7 @@ def _ftcomp(*args: str) -> subprocess.CompletedProcess[str]:
     )
 
 
-def one_session(seed: int, folder: Path) -> tuple[bool, str]:
+def one_session(seed: int, folder: Path, sensor_face: str = "netft") -> tuple[bool, str]:
     """One start; whether it passed and one line saying how it went."""
     q, tilt = random_start(np.random.default_rng(seed))
     start = ",".join(f"{v:g}" for v in q)
@@ -65,7 +68,7 @@ def one_session(seed: int, folder: Path) -> tuple[bool, str]:
     twin = subprocess.Popen(
         [sys.executable, "-m", "ftcomp", "twin", "--robot-host", robot, "--sensor-host", sensor,
          "--seconds", "900", f"--start-q-deg={start}", f"--tilt-deg={tilt[0]:g},{tilt[1]:g}",
-         "--truth", str(truth)],
+         "--seed", str(seed), "--sensor", sensor_face, "--truth", str(truth)],
         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
     )  # fmt: skip
     t0 = time.monotonic()
@@ -111,12 +114,13 @@ def main() -> int:
     parser.add_argument(
         "--seeds", type=int, nargs="+", help="these seeds instead (to repeat a failed start)"
     )
+    parser.add_argument("--sensor", default="netft", help="the twin's sensor face")
     args = parser.parse_args()
     seeds = args.seeds or list(range(1, args.starts + 1))
     passed = 0
     with tempfile.TemporaryDirectory() as tmp:
         for seed in seeds:
-            ok, line = one_session(seed, Path(tmp))
+            ok, line = one_session(seed, Path(tmp), args.sensor)
             passed += ok
             print(f"seed {seed}: {'ok' if ok else 'FAILED'}: {line}", flush=True)
     print(

@@ -68,7 +68,7 @@ def test_kinematics_from_simulated_poses_match_the_simulators_truth() -> None:
     assert rms(motion.alpha_sensor_rad_s2[inner] - rec.truth[inner, 6:9]) < 0.01 * peak_alpha
 
 
-def _moving_tool() -> tuple[np.ndarray, np.ndarray, np.ndarray, SensorMotion]:
+def _moving_tool() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, SensorMotion]:
     """Noise-free readings of TOOL moving along the analytic path (its whole Newton-Euler
     wrench), the orientations, what an accelerometer in the sensor reads, the motion."""
     t, _p, R, motion = analytic_path()

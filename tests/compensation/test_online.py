@@ -134,7 +134,7 @@ def test_the_control_loop_runs_it_as_its_compensator_and_sees_a_grasp() -> None:
 
 
 def _moving_with_a_load(accelerometer: bool) -> tuple[OnlineLoadCompensator, np.ndarray]:
-    """Grasp 0.5 kg while still, then shake it about (up to ~2.6 m/s^2) for 3 s; the
+    """Grasp 0.5 kg while still, then shake it about (up to 4.5 m/s^2, 2.9 RMS) for 3 s; the
     compensated forces while shaking, and the compensator (fed the accelerometer or not)."""
     rng = np.random.default_rng(9)
     settings = OnlineSettings()
@@ -168,6 +168,8 @@ def test_an_accelerometer_weighs_and_compensates_a_load_that_moves() -> None:
     # 0.03 m/s^2 through 0.83 kg: 0.025 N per sample).
     means = shaking[: len(shaking) // 50 * 50, :3].reshape(-1, 50, 3).mean(axis=1)
     assert np.abs(means).max() < 5 * np.hypot(0.125, 0.025) / np.sqrt(50)
-    # Held at the pose's gravity, the same shaking is felt as a contact of about m a.
-    _, still = _moving_with_a_load(accelerometer=False)
-    assert np.sqrt(np.mean(np.sum(still[:, :3] ** 2, axis=1))) > 0.5
+    # Held at the pose's gravity, the same shaking is felt as a contact of about m a: 0.83 kg
+    # (tool and load) at 2.9 m/s^2 RMS, 2.4 N (2.5 measured), taken for contacts as it goes.
+    still_online, still = _moving_with_a_load(accelerometer=False)
+    assert np.sqrt(np.mean(np.sum(still[:, :3] ** 2, axis=1))) > 2.0
+    assert [e.kind for e in still_online.events].count("contact") > 0

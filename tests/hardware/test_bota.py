@@ -257,6 +257,9 @@ def test_bota_dummy_reads_the_vendor_drivers_simulated_sensor() -> None:
     assert extras.shape == (len(readings), 7) and np.all(np.isfinite(extras))
     assert np.all(extras[:, 0] == 25.0)
     assert np.linalg.norm(extras[:, 1:4].mean(axis=0)) == pytest.approx(9.81, abs=0.05)
+    # ... along -z: an accelerometer's specific force with the sensor's z pointing down (as a
+    # tool hangs), the convention --accelerometer reads (docs/hardware.md)
+    np.testing.assert_allclose(extras[:, 1:4].mean(axis=0), [0.0, 0.0, -9.81], atol=0.05)
     got = np.array([r.wrench_sensor for r in readings])
     # bota-driver 1.1.16's Bota_Dummy: (1, 2, 3) N and (0.1, 0.2, 0.3) N*m with noise of about
     # 0.1 N and 0.03 N*m per reading (seen), so the mean of n readings within 5 of its standard

@@ -145,8 +145,8 @@ class GravityCompensator:
             Shape (6,) or (N, 6).
 
         Raises:
-            ParameterError: shapes that do not fit; no ``temperature_C`` for a calibration
-                whose bias follows the temperature.
+            ParameterError: shapes that do not fit (``specific_force_mps2``'s too); no
+                ``temperature_C`` for a calibration whose bias follows the temperature.
         """
         w = np.asarray(wrench_sensor, dtype=float)
         R = np.asarray(R_base_sensor, dtype=float)
@@ -171,7 +171,10 @@ class GravityCompensator:
             elif f.shape == (3,):
                 s = tuple((self._f_to_s @ f).tolist())
             else:
-                raise ParameterError(f"specific_force_mps2 must be (3,) here, got {f.shape}")
+                raise ParameterError(
+                    f"specific_force_mps2 must be (3,) with one reading, got {f.shape}",
+                    field="specific_force_mps2",
+                )
             if T is None:
                 return self._one(w, s, 0.0)
             ref, low, high = T
@@ -188,7 +191,9 @@ class GravityCompensator:
                 np.dot(f, self._imu_matrix, out=out)
             else:
                 raise ParameterError(
-                    f"specific_force_mps2 must be ({len(w)}, 3) here, got {f.shape}"
+                    f"specific_force_mps2 must be ({len(w)}, 3) with {len(w)} readings, got "
+                    f"{f.shape}",
+                    field="specific_force_mps2",
                 )
             np.subtract(w, out, out=out)
             out -= self._bias

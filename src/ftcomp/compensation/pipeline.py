@@ -96,8 +96,8 @@ class WrenchPipeline:
 
     Raises:
         ParameterError: a bias tracker without a compensator; a calibration whose bias follows
-            the sensor's temperature with a sensor that reports none; ``accelerometer`` with a
-            sensor that reports no acceleration.
+            the sensor's temperature with a sensor that reports none; ``accelerometer`` without
+            a compensator, or with a sensor that reports no acceleration.
 
     Attributes:
         load: follows the online compensator's estimate and events (None without one).
@@ -115,6 +115,11 @@ class WrenchPipeline:
     ) -> None:
         if bias_tracker is not None and compensator is None:
             raise ParameterError("tracking the bias needs the tool's calibration")
+        if accelerometer and compensator is None:
+            raise ParameterError(
+                "accelerometer: compensating with it needs the tool's calibration",
+                field="accelerometer",
+            )
         self.extra_channels = extra_channels
         #: Where each reading's acceleration is in its extras (None: not used).
         self._accel_at = _accelerometer_indices(extra_channels) if accelerometer else None
@@ -174,7 +179,8 @@ class WrenchPipeline:
             )
         # refuses a weightless tool, or a temperature model without a temperature, now
         _temperature_index(OnlineLoadCompensator(calibration, settings), extra_channels)
-        pipeline = cls(extra_channels=extra_channels, accelerometer=accelerometer)
+        pipeline = cls(extra_channels=extra_channels)  # its compensator once the rate is known
+        pipeline._accel_at = _accelerometer_indices(extra_channels) if accelerometer else None
         pipeline._weigh = (calibration, settings, round(measure_s * 1e9))
         return pipeline
 
@@ -313,7 +319,8 @@ def _accelerometer_indices(extra_channels: tuple[str, ...]) -> tuple[int, int, i
         reported = ", ".join(extra_channels) if extra_channels else "none"
         raise ParameterError(
             f"accelerometer: the sensor reports no acceleration ({', '.join(wanted)}; its extra "
-            f"channels: {reported})"
+            f"channels: {reported})",
+            field="accelerometer",
         )
     x, y, z = (extra_channels.index(name) for name in wanted)
     return x, y, z

@@ -350,7 +350,8 @@ def compensate_file(
     Raises:
         ParameterError: the output is an input, exists without ``config.overwrite`` or cannot
             be written; the input already has a compensated column; the calibration's bias
-            drift needs a time (or temperature) column the input lacks.
+            drift needs a time (or temperature) column the input lacks, or ``accelerometer``
+            the accelerometer's columns.
         InputFileError, CalibrationFileError: naming the file (and row, column) at fault.
     """
     config = config if config is not None else CompensateConfig()
@@ -386,7 +387,8 @@ def compensate_file(
         if config.accelerometer and missing:
             raise ParameterError(
                 f"{reader.source}: accelerometer: the tool's acceleration is read from each "
-                f"row's {', '.join(_ACCEL)}: the file has no {missing[0]!r} column"
+                f"row's {', '.join(_ACCEL)}: the file has no {missing[0]!r} column",
+                field="accelerometer",
             )
         if drift is not None and not heat and not reader.layout.has_t:
             raise ParameterError(

@@ -347,8 +347,9 @@ def stream(
 
     Raises:
         ParameterError: compensation or a pose asked of a robot that reports none, an online
-            load estimate with a weightless tool, or a calibration whose bias follows the
-            sensor's temperature with a sensor that reports none.
+            load estimate with a weightless tool, a calibration whose bias follows the
+            sensor's temperature with a sensor that reports none, or ``accelerometer`` without a
+            calibration or with a sensor that reports no acceleration.
     """
     knows_pose = robot.pose_known
     if calibration is not None and not knows_pose:
@@ -372,8 +373,6 @@ def stream(
         )
     else:
         compensator = GravityCompensator(calibration) if calibration is not None else None
-        if config.accelerometer and compensator is None:
-            raise ParameterError("accelerometer: compensating with it needs the tool's calibration")
         pipeline = WrenchPipeline(
             compensator,
             bias_tracker=tracker,
