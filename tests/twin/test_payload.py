@@ -30,6 +30,16 @@ OFFSET_M = np.array([0.0, 0.0, 0.025])
 ROTVEC = np.array([0.0, 0.0, 0.5])
 
 
+def _at_rest(receive: object, timeout_s: float = 5.0) -> None:
+    """Wait until the arm is still: every joint slower than 1 mrad/s in 25 packages running."""
+    still, deadline = 0, time.monotonic() + timeout_s
+    while still < 25:
+        assert time.monotonic() < deadline, "the arm did not come to rest"
+        speed = np.abs(receive.getActualQd()).max()  # type: ignore[attr-defined]
+        still = still + 1 if speed < 1e-3 else 0
+        time.sleep(0.002)
+
+
 def _mean_force(receive: object, seconds: float = 0.3) -> np.ndarray:
     """The mean of ``actual_TCP_force`` over ``seconds`` (one value per 2 ms package)."""
     values, t0 = [], time.monotonic()
@@ -71,7 +81,7 @@ def test_payload_set_writes_the_calibration_and_actual_TCP_force_then_reads_no_c
             for _ in range(9):  # the wrist turned every way: the payload's weight moves around
                 dq = np.radians([*rng.uniform(-15, 15, 3), *rng.uniform(-70, 70, 3)])
                 assert control.moveJ((q0 + dq).tolist(), 3.0, 6.0)
-                time.sleep(0.2)  # the arm at rest
+                _at_rest(receive)
                 w = _mean_force(receive)
                 worst_N = max(worst_N, float(np.max(np.abs(w[:3]))))
                 worst_Nm = max(worst_Nm, float(np.max(np.abs(w[3:]))))
