@@ -185,7 +185,7 @@ BUILT_IN: Final[tuple[Device, ...]] = (
                 Fault(
                     "rtde-stop",
                     "the controller stops sending RTDE data (connections stay open)",
-                    "no new data from the controller for 0.50 s",
+                    "no new data from the controller within 0.50 s",
                     1.0,
                 ),
                 _NETWORK_LOSS,

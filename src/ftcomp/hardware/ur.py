@@ -283,9 +283,9 @@ class URRobot(LatenessOfPacer):
             self._last_timestamp_s, self._fresh_at_s = timestamp, now
         elif now - self._fresh_at_s > self.timeout_s:
             self._silent = True
-            raise HardwareError(
-                f"{self.uri.text!r}: no new data from the controller for "
-                f"{now - self._fresh_at_s:.2f} s"
+            raise HardwareError(  # the limit, then what was seen (the line's start is fixed)
+                f"{self.uri.text!r}: no new data from the controller within "
+                f"{self.timeout_s:.2f} s (the last {now - self._fresh_at_s:.2f} s ago)"
             )
         # One getter for both stops (ur_rtde's isProtectiveStopped and isEmergencyStopped each
         # read these bits again: every getter crosses into the client, ~10 us a call).
