@@ -31,12 +31,14 @@ from __future__ import annotations
 
 import csv
 import importlib.util
+import itertools
 import json
 import math
 import os
 import re
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -164,6 +166,49 @@ def _rows(path: Path) -> tuple[list[str], list[list[str]]]:
     return header, body
 
 
+#: What ``run`` says when it stops for its host, not for a device: its newest reading older
+#: than the stale limit (``protective stop: stale_sample``), or its loop too far behind the
+#: robot's schedule (``loop late: ...``).
+HOST_STOPS = ("protective stop: stale_sample", "loop late:")
+#: Runs of a placement or a fault on a fresh twin before a host stop fails the test. The twin,
+#: hardware's stand-in, shares the test host's two cores with ``run``: both loops run at
+#: real-time priority, and while their threads hold both cores the kernel's worker that moves
+#: a pty's bytes (a USB serial adapter's too: a normal-priority kworker) waits, so a serial
+#: face's readings stop arriving (``python bench/bench_serial_delivery.py``: a write waits as
+#: long as real-time threads hold every core). Clean CI runs saw that as a serial face's
+#: stream 77-95 ms silent, in about one of the suite's 60 serial runs, before the fault the run
+#: was there for. A stop for the host says nothing of the face: the run is repeated once on a
+#: fresh twin, with a warning that quotes it; a second host stop fails.
+HOST_ATTEMPTS = 2
+#: What the twin says once it injected its fault.
+INJECTED = "injected the fault"
+
+
+class HostStopWarning(UserWarning):
+    """A conformance run stopped for its host (:data:`HOST_STOPS`) and was run again."""
+
+
+def _repeat_after_host_stop(name: str, attempt: Any, *, expected: str | None = None) -> Any:
+    """``attempt()`` (one run on a fresh twin: its ``run`` result first, what the twin said
+    last), again once when ``run`` stopped for its host, unless the stop is ``expected`` (a
+    fault's declared stop, after the twin injected it), with a :class:`HostStopWarning`; the
+    last result."""
+    for number in range(1, HOST_ATTEMPTS + 1):
+        result = attempt()
+        done, twin_said = result[0], result[-1]
+        stop = next((s for s in HOST_STOPS if s in done.stderr), None)
+        own = expected is not None and expected in done.stderr and INJECTED in twin_said
+        if stop is None or own:
+            return result
+        if number < HOST_ATTEMPTS:
+            timing = next((line for line in done.stdout.splitlines() if "timing:" in line), "")
+            warnings.warn(
+                HostStopWarning(f"{name}: run {number} stopped for its host ({stop}); {timing}"),
+                stacklevel=2,
+            )
+    return result
+
+
 @pytest.fixture(scope="module", params=_pairs())
 def session(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> dict:
     """One pair's first session on a fresh twin: poses designed on the robot, recorded,
@@ -255,6 +300,31 @@ CARRIED = re.compile(
 )
 
 
+def _place(
+    name: str,
+    pair: Pair,
+    surface: str,
+    calibration: Path,
+    options: tuple[str, ...],
+    contact: Path,
+    log: Path,
+) -> tuple[subprocess.CompletedProcess[str], str]:
+    """One placement on a fresh twin: what ``run`` did and what the twin said."""
+    with running_twin(name, *_faces(pair), *options, "--contact-log", str(contact)) as twin:
+        done = _ftcomp(
+            "run", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri,
+            "-c", str(calibration), "--control", "admittance", "--axes", "z",
+            *GAINS[surface], "--settle-band-N", "0.03", "--seconds", "30",
+            # A shared host (HOST_ATTEMPTS): 0.1 s behind the robot's schedule before a
+            # lateness stop, and the stale limit of the faults' runs (STALE_MS; a slower
+            # sensor's plus two of its periods).
+            "--max-late-cycles", "50",
+            "--stale-ms", f"{_stale_ms(pair[1]):g}",
+            "-o", str(log),
+        )  # fmt: skip
+    return done, twin.output()
+
+
 @pytest.mark.parametrize("surface", ["sponge", "book"])
 def test_run_sets_a_half_kilogram_load_down_gently(
     session: dict, surface: str, tmp_path: Path
@@ -265,19 +335,10 @@ def test_run_sets_a_half_kilogram_load_down_gently(
     contact, log = tmp_path / "contact.csv", tmp_path / "run.csv"
     options = ("--load-kg", "0.5", "--surface", surface, "--clearance-mm", "2", TILT)
     name = f"conformance_{surface}_{pair[0].scheme}_{pair[1].scheme}"
-    with running_twin(name, *_faces(pair), *options, "--contact-log", str(contact)) as twin:
-        done = _ftcomp(
-            "run", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri,
-            "-c", str(calibration), "--control", "admittance", "--axes", "z",
-            *GAINS[surface], "--settle-band-N", "0.03", "--seconds", "30",
-            "--max-late-cycles", "50",  # a shared CI host: the client process is not real-time
-            # nor is the twin, hardware's stand-in, on the same two cores (STALE_MS; a slower
-            # sensor's plus two of its periods, as for the faults: CI saw the FT 300's 100 Hz
-            # stream go 75 ms without a reading as a run started).
-            "--stale-ms", f"{_stale_ms(pair[1]):g}",
-            "-o", str(log),
-        )  # fmt: skip
-    assert done.returncode == 0, done.stdout + done.stderr + twin.output()
+    done, said = _repeat_after_host_stop(
+        name, lambda: _place(name, pair, surface, calibration, options, contact, log)
+    )
+    assert done.returncode == 0, done.stdout + done.stderr + said
     assert "settled" in done.stdout
     _rows(log)
     with contact.open() as f:
@@ -296,8 +357,8 @@ def test_run_sets_a_half_kilogram_load_down_gently(
     lateral = np.array([float(rows[-1]["fx"]), float(rows[-1]["fy"])])
     assert np.all(np.abs(lateral - reported) <= 0.25), (lateral, reported)
     # The twin says the same at its end (after the run: the load still rests on the surface).
-    carried = CARRIED.search(twin.output())
-    assert carried is not None, twin.output()
+    carried = CARRIED.search(said)
+    assert carried is not None, said
     last_N, weight_N, peak_N = (float(v) for v in carried.groups())
     assert weight_N == pytest.approx(LOAD_WEIGHT_N, abs=0.005)  # 9.81 here, 9.80665 there
     assert peak_N <= weight_N + 0.3 and last_N == pytest.approx(weight_N, abs=0.05)
@@ -335,13 +396,13 @@ def _stale_ms(sensor: Device) -> float:
     return STALE_MS if rate_hz is None or rate_hz >= 1000.0 else STALE_MS + 2000.0 / rate_hz
 
 
-@pytest.mark.parametrize(("pair", "fault"), _faults())
-def test_each_declared_fault_ends_run_as_declared_with_a_valid_log(
-    pair: Pair, fault: Fault, tmp_path: Path
-) -> None:
-    truth, calibration, log = tmp_path / "truth.json", tmp_path / "cal.json", tmp_path / "run.csv"
+def _fault_run(
+    name: str, pair: Pair, fault: Fault, folder: Path
+) -> tuple[subprocess.CompletedProcess[str], Path, str]:
+    """One fault run on a fresh twin: what ``run`` did, its log and what the twin said."""
+    folder.mkdir()
+    truth, calibration, log = folder / "truth.json", folder / "cal.json", folder / "run.csv"
     options = ("--truth", str(truth), "--fault", fault.name, "--fault-at-s", str(FAULT_AT_S))
-    name = f"conformance_fault_{pair[0].scheme}_{pair[1].scheme}_{fault.name}"
     with running_twin(name, *_faces(pair), *options) as twin:
         calibration_from_truth(truth, calibration)
         done = _ftcomp(
@@ -355,15 +416,32 @@ def test_each_declared_fault_ends_run_as_declared_with_a_valid_log(
             "--stale-ms", f"{_stale_ms(pair[1]):g}",
             timeout_s=30.0,  # the guard against a hang (a stop sent into a silent controller)
         )  # fmt: skip
+    return done, log, twin.output()
+
+
+@pytest.mark.parametrize(("pair", "fault"), _faults())
+def test_each_declared_fault_ends_run_as_declared_with_a_valid_log(
+    pair: Pair, fault: Fault, tmp_path: Path
+) -> None:
+    name = f"conformance_fault_{pair[0].scheme}_{pair[1].scheme}_{fault.name}"
+    # A stale stop is a stream-loss fault's own, once the twin injected it.
+    declared = fault.run_says if fault.run_says != STALE else f"protective stop: {STALE}"
+    count = itertools.count(1)
+    done, log, twin_said = _repeat_after_host_stop(
+        name,
+        lambda: _fault_run(name, pair, fault, tmp_path / f"run{next(count)}"),
+        expected=declared if fault.run_says is not None else None,
+    )
     _, rows = _rows(log)
     t_last = float(rows[-1][0])
-    said = done.stdout + done.stderr + twin.output()
+    said = done.stdout + done.stderr + twin_said
     if fault.run_says is None:  # within the limits: no fault, the run goes on to its end
         assert done.returncode == 0, said
         assert SECONDS - 0.1 <= t_last <= SECONDS + 0.1, t_last
         return
     assert done.returncode == 1, said
     assert fault.run_says in done.stderr and "the robot was stopped" in done.stderr, said
+    assert f"{INJECTED} {fault.name}" in twin_said, said  # the stop is the fault's
     # the run's clock starts with the robot's stream, the fault's clock too; a stale limit
     # longer than the default sees a stream's loss that much later
     later_s = (_stale_ms(pair[1]) - DEFAULT_STALE_MS) / 1000.0 if fault.run_says == STALE else 0.0

@@ -209,6 +209,9 @@ class TwinResult:
         contact: with a load and a surface, what the surface carried (the truth a client's
             placement is judged by: ``the surface carries 4.901 N of the load's 4.903 N at
             the end, at most 4.950 N``); empty otherwise.
+        fault: with a fault, whether it came (``injected the fault bota-overrange 3 s after a
+            client first streamed``, or that it did not: the run ended first); empty
+            otherwise.
     """
 
     cycles: int
@@ -219,6 +222,7 @@ class TwinResult:
     realtime: bool
     timing: TimingSummary
     contact: str = ""
+    fault: str = ""
 
     def line(self) -> str:
         """The twin's last line: what it served and its compute time."""
@@ -232,7 +236,7 @@ class TwinResult:
             f"twin served {self.cycles} periods ({self.late_cycles} late), {self.robot_served}, "
             f"{self.sensor_served}; {step}"
             f"{'' if self.realtime else ' (no real-time priority)'}; ended by {self.reason}"
-            + (f"\n{self.contact}" if self.contact else "")
+            + "".join(f"\n{text}" for text in (self.fault, self.contact) if text)
         )
 
 
@@ -318,7 +322,17 @@ class _Twin:
             realtime=clock.realtime,
             timing=summary,
             contact=self._contact_line(),
+            fault=self._fault_line(),
         )
+
+    def _fault_line(self) -> str:
+        """Whether the fault came (a client's stop is judged against it)."""
+        fault, at_s = self.config.fault, self.config.fault_at_s
+        if fault is None:
+            return ""
+        if self.fault_fired:
+            return f"injected the fault {fault} {at_s:g} s after a client first streamed"
+        return f"did not inject the fault {fault}: the twin ended first"
 
     def _carries_a_load(self) -> bool:
         cell_config = self.config.cell
