@@ -68,9 +68,10 @@ _NICE_AND_BOUNDED = ("nice", "-n", "19", "timeout", "-s", "KILL", str(SIM_MAX_S)
 class Sim:
     """The running simulator: its address and process group (to stop and resume it)."""
 
-    def __init__(self, address: str, proc: subprocess.Popen[str]) -> None:
+    def __init__(self, address: str, proc: subprocess.Popen[str], drain: Drain) -> None:
         self.address = address
         self.proc = proc
+        self.drain = drain
 
     def uri(self, options: str = "") -> str:
         """The backend's URI for it (libfranka's real-time check off: not a real-time host)."""
@@ -85,15 +86,15 @@ class Sim:
         os.killpg(self.proc.pid, signal.SIGCONT)
 
 
-@pytest.fixture(scope="module")
-def sim() -> Iterator[Sim]:
-    """franky-sim's MuJoCo FR3 on a loopback address of this file's own (ports 1337/1338)."""
-    if not FRANKY_SIM.exists():
-        pytest.skip(f"{FRANKY_SIM} not found (franky-sim is installed without its script)")
-    address = loopback_address("franky-sim")
-    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+@contextlib.contextmanager
+def _launched(command: list[str], ready: str, address: str) -> Iterator[Sim]:
+    """A simulator process (its own process group), once it printed ``ready``; killed at the
+    end of the block."""
+    tests = str(Path(__file__).resolve().parents[1])  # for the stand-ins' modules
+    path = os.pathsep.join(filter(None, [tests, os.environ.get("PYTHONPATH", "")]))
+    env = {**os.environ, "PYTHONUNBUFFERED": "1", "PYTHONPATH": path}
     proc = subprocess.Popen(
-        [*_NICE_AND_BOUNDED, str(FRANKY_SIM), "-s", "mujoco", "--hostname", address],
+        command,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -105,21 +106,32 @@ def sim() -> Iterator[Sim]:
         assert proc.stdout is not None
         deadline = time.monotonic() + 60.0
         seen = ""
-        while READY not in seen:
+        while ready not in seen:
             if time.monotonic() > deadline or proc.poll() is not None:
                 _kill_group(proc)
                 _, err = proc.communicate(timeout=5)
-                pytest.fail(f"franky-sim did not start: {seen[-500:]}{err[-2000:]}")
-            ready, _, _ = select.select([proc.stdout], [], [], 0.5)
-            if ready:
+                pytest.fail(f"{command[-3:]} did not start: {seen[-500:]}{err[-2000:]}")
+            readable, _, _ = select.select([proc.stdout], [], [], 0.5)
+            if readable:
                 seen += proc.stdout.readline()
         drain = Drain(proc)
-        yield Sim(address, proc)
+        yield Sim(address, proc, drain)
     finally:
         _kill_group(proc)
         proc.wait(timeout=10)
         if drain is not None:
             drain.join()
+
+
+@pytest.fixture(scope="module")
+def sim() -> Iterator[Sim]:
+    """franky-sim's MuJoCo FR3 on a loopback address of this file's own (ports 1337/1338)."""
+    if not FRANKY_SIM.exists():
+        pytest.skip(f"{FRANKY_SIM} not found (franky-sim is installed without its script)")
+    address = loopback_address("franky-sim")
+    command = [*_NICE_AND_BOUNDED, str(FRANKY_SIM), "-s", "mujoco", "--hostname", address]
+    with _launched(command, READY, address) as running:
+        yield running
 
 
 def _kill_group(proc: subprocess.Popen[str]) -> None:
@@ -171,8 +183,9 @@ def test_ten_mm_per_s_for_one_second_of_the_controllers_time_moves_ten_mm(sim: S
 
 
 def test_a_reflex_is_one_line_naming_libfrankas_errors() -> None:
-    # franky-sim simulates no reflex: the line is checked on franky's own exception type with
-    # the text libfranka gives a reflex (robot_impl.cpp: the aborted motion and its errors).
+    # The line on franky's own exception type with the text libfranka gives a reflex
+    # (robot_impl.cpp: the aborted motion and its errors); a reflex forced on franky-sim's arm:
+    # test_a_forced_reflex_ends_run_with_its_stop_and_a_complete_log.
     exc = franky.ControlException(
         'libfranka: Move command aborted: motion aborted by reflex! ["cartesian_reflex"]\n'
         "control_command_success_rate: 0.99"
@@ -370,3 +383,48 @@ def test_a_silent_controller_is_seen_by_a_pose_read_while_nothing_moves(sim: Sim
         finally:
             sim.resume()
     assert seen_after_s < 3.0  # libfranka's receive time-out is 1 s
+
+
+def test_a_forced_reflex_ends_run_with_its_stop_and_a_complete_log(tmp_path: Path) -> None:
+    """franky-sim's own MuJoCo FR3, its protocol server with the arm's error state
+    (standins/franky_sim_faults.py: franky-sim simulates no reflex): a ``cartesian_reflex``
+    raised while ``run`` moves the arm ends the run in the period libfranka reports it, with
+    the reflex's line, and the log whole."""
+    address = loopback_address("franky-sim-faults")
+    command = [sys.executable, "-m", "standins.franky_sim_faults", address, str(SIM_MAX_S)]
+    limits = SafetyLimits(
+        max_twist=np.array([0.01] * 3 + [0.1] * 3),
+        max_twist_rate=np.array([0.1] * 3 + [1.0] * 3),
+        max_travel=np.array([0.05] * 3 + [0.2] * 3),
+        max_force_N=40.0,
+        max_torque_Nm=8.0,
+        stale_after_s=0.1,
+        max_repeated_samples=2,
+    )
+    no_tool = GravityModel(
+        0.0, np.zeros(3), np.zeros(3), np.zeros(3), tilt_U_rad=0.0, tilt_V_rad=0.0
+    )
+    config = RunConfig(AdmittanceConfig(limits), duration_s=20.0, max_late_cycles=10_000)
+    log = tmp_path / "run.csv"
+    reads = [0]
+    with _launched(command, "ready", address) as faulty:
+
+        class _ForcesAReflex(_SteadyPush):
+            def read(self) -> WrenchSample:
+                reads[0] += 1
+                if reads[0] == 100:  # the loop is going: the arm moves at the push's twist
+                    os.kill(faulty.proc.pid, signal.SIGUSR1)
+                return super().read()
+
+        with open_robot(faulty.uri("frequency_hz=100")) as robot:
+            result = run_compliant(robot, _ForcesAReflex(2.0, seed=41), no_tool, config, log)
+        said = "".join(faulty.drain.lines["stdout"])
+    assert "reflex" in said.split(), said
+    assert result.outcome is Outcome.ERROR, result
+    reflex = 'the arm stopped: libfranka: Move command aborted: motion aborted by reflex! ["ca'
+    assert reflex + 'rtesian_reflex"]' in result.message, result.message
+    # raised at the 100th cycle's read: seen within 0.1 s (10 periods at 100 Hz)
+    assert 100 <= result.cycles <= 110, result.cycles
+    rows = np.loadtxt(log, delimiter=",", skiprows=1, ndmin=2)
+    assert len(rows) == result.cycles
+    assert np.all(np.isfinite(rows))

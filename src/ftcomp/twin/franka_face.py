@@ -58,12 +58,12 @@ from ftcomp.errors import ParameterError
 from ftcomp.frames import matrix_from_rotvec
 from ftcomp.sim.cell import SimCell
 
-__all__ = ["FrankaFace"]
+__all__ = ["CARTESIAN_REFLEX", "FrankaFace", "server_with_errors"]
 
 _PERIOD_S: Final = 0.001
 _PORT: Final = 1337
 #: libfranka's error indices (research_interface::robot::Error), of the 41 the state carries.
-_CARTESIAN_REFLEX: Final = 7
+CARTESIAN_REFLEX: Final = 7
 _COMMUNICATION_CONSTRAINTS_VIOLATION: Final = 25
 _ERROR_COUNT: Final = 41
 #: The Cartesian force collision threshold until the client sets one [N] (libfranka's examples'
@@ -160,7 +160,7 @@ class FrankaFace:
         server = self.server
         self.contact_N.append(contact_force_N)
         if sum(self.contact_N) / len(self.contact_N) > server.force_threshold_N:
-            server.reflex(_CARTESIAN_REFLEX)
+            server.reflex(CARTESIAN_REFLEX)
         server.process_commands()
 
     def publish(self, wrench_sensor: NDArray[np.float64]) -> None:
@@ -175,7 +175,7 @@ class FrankaFace:
         if fault == "network-loss":
             self.silent = True
         elif fault == "reflex":
-            self.server.reflex(_CARTESIAN_REFLEX)
+            self.server.reflex(CARTESIAN_REFLEX)
         elif fault == "communication-violation":
             self.server.reflex(_COMMUNICATION_CONSTRAINTS_VIOLATION)
         elif fault == "user-stop":
@@ -270,10 +270,14 @@ def _cell_arm(franky_sim: Any, base: Any) -> Any:
     return CellArm
 
 
-def _server(franky_sim: Any, protocol: Any) -> Any:
-    """franky-sim's ``FrankaRobotServer`` with the arm's error state (module docstring)."""
+def server_with_errors(franky_sim: Any, protocol: Any) -> Any:
+    """franky-sim's ``FrankaRobotServer`` with the arm's error state (module docstring): the
+    reflexes and the user stop as libfranka's protocol reports them, error recovery, the
+    Cartesian force thresholds kept, the control command success rate. Over any franky-sim
+    ``BaseRobot``: the twin's cell arm (:class:`FrankaFace`) and franky-sim's own MuJoCo FR3
+    (``tests/standins/franky_sim_faults.py``). ``franky_sim`` and its ``protocol`` module are
+    passed in (imported only when a Franka is served)."""
     MoveStatus = protocol.MoveStatus
-    ControllerMode = protocol.MoveCommandControllerMode
     RobotCommand = protocol.RobotCommand
     RobotMode = protocol.RobotMode
 
@@ -292,7 +296,7 @@ def _server(franky_sim: Any, protocol: Any) -> Any:
             server.clear_errors()
             super().handle(server)
 
-    class Server(franky_sim.FrankaRobotServer):
+    class ServerWithErrors(franky_sim.FrankaRobotServer):
         def __init__(self, arm: Any, host: str) -> None:
             super().__init__(arm, [host])
             # franky-sim 1.0's table of command handlers (the pinned range keeps its name).
@@ -323,33 +327,20 @@ def _server(franky_sim: Any, protocol: Any) -> Any:
                 self._abort(self.abort_owed)
             super()._post_process_commands()
 
-        def _reset_state(self) -> None:  # a client connected or left: the arm holds
-            super()._reset_state()
-            self.robot.hold()
-
-        def stop_motion(self, send_preemption_signal: bool = True) -> None:
-            super().stop_motion(send_preemption_signal)
-            self.robot.hold()
-
         def start_motion(self, controller_mode: Any, generator_mode: Any, motion_id: int) -> None:
-            self.robot.last_target = None
-            self.robot.holding = False
             super().start_motion(controller_mode, generator_mode, motion_id)
             self.new_commands.clear()
-            if self.mode is not None:  # in error: the motion ends as soon as it started
-                self.abort_owed = (
-                    MoveStatus.kEmergencyAborted
-                    if self.mode == RobotMode.kUserStopped
-                    else MoveStatus.kReflexAborted
-                )
-            elif controller_mode == ControllerMode.kExternalController:
-                # Torques are not simulated: refused, never accepted and ignored.
-                self.abort_owed = MoveStatus.kCommandNotPossibleRejected
-                print(
-                    "twin: a torque-controlled motion (libfranka's external controller) is "
-                    "refused: the twin's FR3 takes joint and Cartesian motion generators only",
-                    file=sys.stderr,
-                )
+            self.abort_owed = self.refusal(controller_mode)
+
+        def refusal(self, controller_mode: Any) -> Any:
+            """The Move status that ends a motion as soon as it started (None: it runs): in
+            error, the error's."""
+            del controller_mode
+            if self.mode is None:
+                return None
+            if self.mode == RobotMode.kUserStopped:
+                return MoveStatus.kEmergencyAborted
+            return MoveStatus.kReflexAborted
 
         def _abort(self, status: Any) -> None:
             motion_id = self.current_motion_id
@@ -369,20 +360,16 @@ def _server(franky_sim: Any, protocol: Any) -> Any:
             self.reflex_reason[error] = True
             self.mode = RobotMode.kReflex
             self._abort(MoveStatus.kReflexAborted)
-            self._stop_here()
+            self.stop_here()
 
         def user_stop(self) -> None:
             """The user stop: the motion aborted, the arm stopped until recovered."""
             self.mode = RobotMode.kUserStopped
             self._abort(MoveStatus.kEmergencyAborted)
-            self._stop_here()
+            self.stop_here()
 
-        def _stop_here(self) -> None:
-            """A stop holds the arm where it is (the measured joints), not where its motion
-            was heading: in a stiff contact the command runs ahead of the arm, and holding it
-            would press on."""
-            cell = self.robot.cell
-            cell.command_joints(cell.q_rad, np.zeros(cell.n_joints))
+        def stop_here(self) -> None:
+            """After a stop: where the arm holds (franky-sim's own stop: its desired joints)."""
 
         def clear_errors(self) -> None:
             self.errors = [False] * _ERROR_COUNT
@@ -406,5 +393,47 @@ def _server(franky_sim: Any, protocol: Any) -> Any:
             if self.mode is not None:
                 changes["robot_mode"] = self.mode
             return state.replace(**changes)
+
+    return ServerWithErrors
+
+
+def _server(franky_sim: Any, protocol: Any) -> Any:
+    """:func:`server_with_errors` over the cell's arm: the arm holds its commanded joints
+    when idle, holds where it is after a stop, and a torque-controlled motion is refused."""
+    MoveStatus = protocol.MoveStatus
+    ControllerMode = protocol.MoveCommandControllerMode
+
+    class Server(server_with_errors(franky_sim, protocol)):  # type: ignore[misc]
+        def _reset_state(self) -> None:  # a client connected or left: the arm holds
+            super()._reset_state()
+            self.robot.hold()
+
+        def stop_motion(self, send_preemption_signal: bool = True) -> None:
+            super().stop_motion(send_preemption_signal)
+            self.robot.hold()
+
+        def start_motion(self, controller_mode: Any, generator_mode: Any, motion_id: int) -> None:
+            self.robot.last_target = None
+            self.robot.holding = False
+            super().start_motion(controller_mode, generator_mode, motion_id)
+
+        def refusal(self, controller_mode: Any) -> Any:
+            in_error = super().refusal(controller_mode)
+            if in_error is None and controller_mode == ControllerMode.kExternalController:
+                # Torques are not simulated: refused, never accepted and ignored.
+                print(
+                    "twin: a torque-controlled motion (libfranka's external controller) is "
+                    "refused: the twin's FR3 takes joint and Cartesian motion generators only",
+                    file=sys.stderr,
+                )
+                return MoveStatus.kCommandNotPossibleRejected
+            return in_error
+
+        def stop_here(self) -> None:
+            """A stop holds the arm where it is (the measured joints), not where its motion
+            was heading: in a stiff contact the command runs ahead of the arm, and holding it
+            would press on."""
+            cell = self.robot.cell
+            cell.command_joints(cell.q_rad, np.zeros(cell.n_joints))
 
     return Server
