@@ -306,10 +306,12 @@ def _place(
     surface: str,
     calibration: Path,
     options: tuple[str, ...],
-    contact: Path,
-    log: Path,
-) -> tuple[subprocess.CompletedProcess[str], str]:
-    """One placement on a fresh twin: what ``run`` did and what the twin said."""
+    folder: Path,
+) -> tuple[subprocess.CompletedProcess[str], Path, Path, str]:
+    """One placement on a fresh twin, its files in ``folder``: what ``run`` did, the twin's
+    contact log, ``run``'s log and what the twin said."""
+    folder.mkdir()
+    contact, log = folder / "contact.csv", folder / "run.csv"
     with running_twin(name, *_faces(pair), *options, "--contact-log", str(contact)) as twin:
         done = _ftcomp(
             "run", "--robot", twin.robot_uri, "--sensor", twin.sensor_uri,
@@ -322,7 +324,7 @@ def _place(
             "--stale-ms", f"{_stale_ms(pair[1]):g}",
             "-o", str(log),
         )  # fmt: skip
-    return done, twin.output()
+    return done, contact, log, twin.output()
 
 
 @pytest.mark.parametrize("surface", ["sponge", "book"])
@@ -332,11 +334,12 @@ def test_run_sets_a_half_kilogram_load_down_gently(
     pair, calibration = session["pair"], session["files"]["cal.json"]
     if surface == "book" and pair[1].twin.name != _first("sensor"):
         pytest.skip("the book (stiff contact: the robot's servo) with the first sensor face only")
-    contact, log = tmp_path / "contact.csv", tmp_path / "run.csv"
     options = ("--load-kg", "0.5", "--surface", surface, "--clearance-mm", "2", TILT)
     name = f"conformance_{surface}_{pair[0].scheme}_{pair[1].scheme}"
-    done, said = _repeat_after_host_stop(
-        name, lambda: _place(name, pair, surface, calibration, options, contact, log)
+    count = itertools.count(1)
+    done, contact, log, said = _repeat_after_host_stop(
+        name,
+        lambda: _place(name, pair, surface, calibration, options, tmp_path / f"run{next(count)}"),
     )
     assert done.returncode == 0, done.stdout + done.stderr + said
     assert "settled" in done.stdout
