@@ -37,3 +37,43 @@ def test_a_refused_real_time_priority_is_said_once_with_how_to_allow_it(
     assert len(lines) == 1
     assert "Operation not permitted" in lines[0] and "cap_sys_nice" in lines[0]
     assert "rtprio" in lines[0]
+
+
+def test_the_loop_and_python_threads_are_real_time_and_native_threads_keep_their_own() -> None:
+    """The loop's thread at its priority, another Python thread (a reader, the log's worker)
+    at WORKER_PRIORITY, and a native thread (numpy's OpenBLAS worker, which spins between
+    jobs) as its library left it; all restored after."""
+    import threading
+
+    import numpy as np
+
+    np.ones((64, 64)) @ np.ones((64, 64))  # numpy's BLAS started
+    python_ids = {t.native_id for t in threading.enumerate()}
+    native = sorted(int(t) for t in os.listdir("/proc/self/task") if int(t) not in python_ids)
+    if not native:
+        pytest.skip("numpy runs no thread of its own here (one core, or its BLAS limited to one)")
+    release = threading.Event()
+    started = threading.Event()
+
+    def wait() -> None:
+        started.set()
+        release.wait(10.0)
+
+    helper = threading.Thread(target=wait, daemon=True)
+    helper.start()
+    started.wait(10.0)
+    try:
+        with realtime_loop(priority=5) as granted:
+            if not granted:
+                pytest.skip("real-time scheduling is not allowed here")
+            assert os.sched_getscheduler(0) == os.SCHED_FIFO
+            assert os.sched_getparam(0).sched_priority == 5
+            assert helper.native_id is not None
+            assert os.sched_getscheduler(helper.native_id) == os.SCHED_FIFO
+            assert os.sched_getparam(helper.native_id).sched_priority == pacing.WORKER_PRIORITY
+            assert all(os.sched_getscheduler(t) == os.SCHED_OTHER for t in native)
+        assert os.sched_getscheduler(0) == os.SCHED_OTHER
+        assert os.sched_getscheduler(helper.native_id) == os.SCHED_OTHER
+    finally:
+        release.set()
+        helper.join(10.0)

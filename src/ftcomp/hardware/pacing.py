@@ -31,14 +31,21 @@ one loop of ``ftcomp run``, ``stream`` and ``record``) and ``ftcomp twin``'s cel
   fast as its physics and has no schedule.
 - :func:`realtime_loop` is what a live loop on the host's clock asks of the process while it
   runs: real-time scheduling (SCHED_FIFO, as ur_rtde asks for its own loops) for the loop's
-  thread and the device clients' native reader threads, so that a busy machine's ordinary
-  processes cannot hold them off the CPU, and a short interpreter switch interval, so that a
-  Python thread beside the loop (the observers' worker) hands the interpreter's lock back within
-  a fraction of a period (the default, 5 ms, is 2.5 periods at 500 Hz), and a timer slack of
+  thread and, a little lower, the process's other Python threads, so that a busy machine's
+  ordinary processes cannot hold them off the CPU, and a short interpreter switch interval, so
+  that a Python thread beside the loop (the observers' worker) hands the interpreter's lock back
+  within a fraction of a period (the default, 5 ms, is 2.5 periods at 500 Hz), and a timer slack of
   1 ns, so that the limiter's sleep ends on time (an ordinary thread's default slack, 50 us,
   doubles its median wake-up delay). Where the OS refuses real-time scheduling (no
   CAP_SYS_NICE, an ``rtprio`` limit of 0, a container without it) it says so once, with how to
-  allow it, and the loop runs at normal priority.
+  allow it, and the loop runs at normal priority. A device client's native threads keep the
+  scheduling their library gives them (libfranka raises its own control thread's; ur_rtde
+  takes an ``rt_priority``): raised to the loop's, ur_rtde's receive thread, which polls its
+  socket every 0.1 ms and at times ran 75 ms without a pause, took the twin's core (its cell
+  late in 250-390 of 3000 periods a run; 0-7 left to them) and the one where the kernel's
+  worker waited to hand a serial sensor's bytes on (a Bota Gen0 stream 77 ms silent), and
+  numpy's and scipy's OpenBLAS workers, which spin up to 2^28 cycles between jobs, held a core
+  for 80 ms (both traced with the kernel's sched_switch events, 2026-11-29).
 - :class:`LoopClock` is all of it for one loop, as a context manager: on entry the collector's
   policy (what exists after the set-up collected once and frozen, automatic collection off, so
   that the loop's own garbage is collected in its slack, :meth:`LoopClock.collect`) and
@@ -274,37 +281,16 @@ def _timer_slack(ns: int) -> None:
         ctypes.CDLL(None).prctl(_PR_SET_TIMERSLACK, ctypes.c_ulong(ns), 0, 0, 0)
 
 
-def _comm(path: str) -> str:
-    try:
-        with open(path, encoding="utf-8") as handle:
-            return handle.read().strip()
-    except OSError:
-        return ""
-
-
-def _native_threads() -> list[int]:
-    """The ids of this process's threads not started by :mod:`threading` and left unnamed (a
-    device client's native readers, ur_rtde's and pynetft's, carry the process's name), without
-    the calling one; a named native thread (a view server's ``tokio-rt-worker``) is left as it
-    is."""
-    try:
-        tids = {int(t) for t in os.listdir("/proc/self/task")}
-    except OSError:
-        return []
-    python = {t.native_id for t in threading.enumerate()}
-    name = _comm("/proc/self/comm")
-    return sorted(t for t in tids - python if _comm(f"/proc/self/task/{t}/comm") == name)
-
-
 @contextlib.contextmanager
 def realtime_loop(priority: int = LOOP_PRIORITY, *, realtime: bool = True) -> Iterator[bool]:
     """While the block runs: the switch interval at :data:`LOOP_SWITCH_INTERVAL_S` and, with
-    ``realtime``, SCHED_FIFO at ``priority`` for the calling thread and the device clients'
-    native threads (module docstring), and at :data:`WORKER_PRIORITY` for the other Python
-    threads (the observers' worker): each holds the interpreter's lock in turn, and one that an
-    ordinary process preempts while it holds the lock would stall the loop and the readers
-    behind it (seen: a view's worker under a busy loop on each core aged the Net F/T's data
-    past the stale limit). All undone on exit. Yields whether real-time scheduling was
+    ``realtime``, SCHED_FIFO at ``priority`` for the calling thread and at
+    :data:`WORKER_PRIORITY` for the other Python threads (the sensors' readers, the observers'
+    worker): each holds the interpreter's lock in turn, and one that an ordinary process
+    preempts while it holds the lock would stall the loop and the readers behind it (seen: a
+    view's worker under a busy loop on each core aged the Net F/T's data past the stale
+    limit). A device client's native threads are left as their library set them (module
+    docstring). All undone on exit. Yields whether real-time scheduling was
     granted (a refusal is logged once per process, with how to allow it).
     """
     global _said_refused
@@ -329,12 +315,11 @@ def realtime_loop(priority: int = LOOP_PRIORITY, *, realtime: bool = True) -> It
             worker = os.sched_param(WORKER_PRIORITY)
             me = threading.get_native_id()
             python = [t.native_id for t in threading.enumerate() if t.native_id != me]
-            for tids, chosen in ((_native_threads(), param), (python, worker)):
-                for tid in tids:
-                    with contextlib.suppress(OSError):  # a thread that just ended
-                        if tid and os.sched_getscheduler(tid) == os.SCHED_OTHER:  # not its own
-                            os.sched_setscheduler(tid, os.SCHED_FIFO, chosen)
-                            granted.append(tid)
+            for tid in python:
+                with contextlib.suppress(OSError):  # a thread that just ended
+                    if tid and os.sched_getscheduler(tid) == os.SCHED_OTHER:  # not its own
+                        os.sched_setscheduler(tid, os.SCHED_FIFO, worker)
+                        granted.append(tid)
     try:
         yield bool(granted)
     finally:
