@@ -15,11 +15,12 @@ side. Prints the wait per channel and the ratio pty/socket:
 
 Each measurement runs in a process of its own. On this project's 2-core host (2026-11-28),
 medians of 3: pty 41.8, 92.2, 192.5 ms; socket 0.2 ms each (ratios 189x, 483x, 1052x). A pty's
-wait is the rest of the hold: the kworker runs when a core frees. This is why a 2-core host
-running ``ftcomp twin`` (its cell loop real-time) beside ``ftcomp run`` (its loop and the
-clients' readers real-time) can see a serial face's stream stop for tens of milliseconds
-(tests/devices/test_conformance.py, ``HOST_ATTEMPTS``), and why a real serial sensor wants a
-core that real-time threads leave free (docs/hardware.md). Needs real-time scheduling (root or
+wait is the rest of the hold: the kworker runs when a core frees. The worker is woken on the
+writer's core, so one real-time thread that runs long there is enough: ur_rtde's receive
+thread and numpy's OpenBLAS worker, raised to ``ftcomp run``'s priority, once held a core for
+75-80 ms and a serial face's stream went that long silent (hardware/pacing.py; ``run`` leaves
+them at their own priority since). A real serial sensor wants a core that real-time threads
+leave free now and then (docs/hardware.md, "Real time"). Needs real-time scheduling (root or
 CAP_SYS_NICE); exits 2 without it.
 """
 

@@ -171,14 +171,14 @@ def _rows(path: Path) -> tuple[list[str], list[list[str]]]:
 #: robot's schedule (``loop late: ...``).
 HOST_STOPS = ("protective stop: stale_sample", "loop late:")
 #: Runs of a placement or a fault on a fresh twin before a host stop fails the test. The twin,
-#: hardware's stand-in, shares the test host's two cores with ``run``: both loops run at
-#: real-time priority, and while their threads hold both cores the kernel's worker that moves
-#: a pty's bytes (a USB serial adapter's too: a normal-priority kworker) waits, so a serial
-#: face's readings stop arriving (``python bench/bench_serial_delivery.py``: a write waits as
-#: long as real-time threads hold every core). Clean CI runs saw that as a serial face's
-#: stream 77-95 ms silent, in about one of the suite's 60 serial runs, before the fault the run
-#: was there for. A stop for the host says nothing of the face: the run is repeated once on a
-#: fresh twin, with a warning that quotes it; a second host stop fails.
+#: hardware's stand-in, shares the test host's two cores with ``run``, both at real-time
+#: priority: a stop for the host says nothing of the face, so the run is repeated once on a
+#: fresh twin, with a warning that quotes its timing line; a second host stop fails. Serial
+#: faces stopped so in up to two of a clean CI run's seven serial runs (a Bota Gen0 stream
+#: 77 ms silent) until ``run`` stopped raising its client libraries' native threads to its
+#: priority (hardware/pacing.py: ur_rtde's and OpenBLAS's spinning threads held a core, and the
+#: kernel's worker that hands a pty's bytes on waited behind them; ``python
+#: bench/bench_serial_delivery.py`` shows that wait).
 HOST_ATTEMPTS = 2
 #: What the twin says once it injected its fault.
 INJECTED = "injected the fault"
