@@ -323,11 +323,9 @@ class _SteadyPush(NothingToClose):
         return [self.read()]
 
 
-def test_the_controller_going_silent_ends_run_with_its_line_and_a_complete_log(
-    sim: Sim, tmp_path: Path
-) -> None:
-    # The last test of the module: the simulator is paused for longer than libfranka's 1 s
-    # receive time-out, then resumed.
+def _slow_run() -> tuple[RunConfig, GravityModel]:
+    """A 20 s admittance run at 10 mm/s at most, 0.1 s stale limit, and no tool: for a run
+    that a fault ends."""
     limits = SafetyLimits(
         max_twist=np.array([0.01] * 3 + [0.1] * 3),
         max_twist_rate=np.array([0.1] * 3 + [1.0] * 3),
@@ -340,7 +338,15 @@ def test_the_controller_going_silent_ends_run_with_its_line_and_a_complete_log(
     no_tool = GravityModel(
         0.0, np.zeros(3), np.zeros(3), np.zeros(3), tilt_U_rad=0.0, tilt_V_rad=0.0
     )
-    config = RunConfig(AdmittanceConfig(limits), duration_s=20.0, max_late_cycles=10_000)
+    return RunConfig(AdmittanceConfig(limits), duration_s=20.0, max_late_cycles=10_000), no_tool
+
+
+def test_the_controller_going_silent_ends_run_with_its_line_and_a_complete_log(
+    sim: Sim, tmp_path: Path
+) -> None:
+    # The last test of the module: the simulator is paused for longer than libfranka's 1 s
+    # receive time-out, then resumed.
+    config, no_tool = _slow_run()
     log = tmp_path / "run.csv"
     paused_at: list[float] = []
     reads = [0]
@@ -392,19 +398,7 @@ def test_a_forced_reflex_ends_run_with_its_stop_and_a_complete_log(tmp_path: Pat
     the reflex's line, and the log whole."""
     address = loopback_address("franky-sim-faults")
     command = [sys.executable, "-m", "standins.franky_sim_faults", address, str(SIM_MAX_S)]
-    limits = SafetyLimits(
-        max_twist=np.array([0.01] * 3 + [0.1] * 3),
-        max_twist_rate=np.array([0.1] * 3 + [1.0] * 3),
-        max_travel=np.array([0.05] * 3 + [0.2] * 3),
-        max_force_N=40.0,
-        max_torque_Nm=8.0,
-        stale_after_s=0.1,
-        max_repeated_samples=2,
-    )
-    no_tool = GravityModel(
-        0.0, np.zeros(3), np.zeros(3), np.zeros(3), tilt_U_rad=0.0, tilt_V_rad=0.0
-    )
-    config = RunConfig(AdmittanceConfig(limits), duration_s=20.0, max_late_cycles=10_000)
+    config, no_tool = _slow_run()
     log = tmp_path / "run.csv"
     reads = [0]
     with _launched(command, "ready", address) as faulty:
