@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import csv
 import importlib.util
-import itertools
 import json
 import math
 import os
@@ -188,13 +187,17 @@ class HostStopWarning(UserWarning):
     """A conformance run stopped for its host (:data:`HOST_STOPS`) and was run again."""
 
 
-def _repeat_after_host_stop(name: str, attempt: Any, *, expected: str | None = None) -> Any:
-    """``attempt()`` (one run on a fresh twin: its ``run`` result first, what the twin said
-    last), again once when ``run`` stopped for its host, unless the stop is ``expected`` (a
-    fault's declared stop, after the twin injected it), with a :class:`HostStopWarning`; the
-    last result."""
+def _repeat_after_host_stop(
+    name: str, attempt: Any, folder: Path, *, expected: str | None = None
+) -> Any:
+    """``attempt(folder / "runN")`` (one run on a fresh twin, its files in a new folder: its
+    ``run`` result first, what the twin said last), again once when ``run`` stopped for its
+    host, unless the stop is ``expected`` (a fault's declared stop, after the twin injected
+    it), with a :class:`HostStopWarning`; the last result."""
     for number in range(1, HOST_ATTEMPTS + 1):
-        result = attempt()
+        run_folder = folder / f"run{number}"
+        run_folder.mkdir()
+        result = attempt(run_folder)
         done, twin_said = result[0], result[-1]
         stop = next((s for s in HOST_STOPS if s in done.stderr), None)
         own = expected is not None and expected in done.stderr and INJECTED in twin_said
@@ -310,7 +313,6 @@ def _place(
 ) -> tuple[subprocess.CompletedProcess[str], Path, Path, str]:
     """One placement on a fresh twin, its files in ``folder``: what ``run`` did, the twin's
     contact log, ``run``'s log and what the twin said."""
-    folder.mkdir()
     contact, log = folder / "contact.csv", folder / "run.csv"
     with running_twin(name, *_faces(pair), *options, "--contact-log", str(contact)) as twin:
         done = _ftcomp(
@@ -336,10 +338,8 @@ def test_run_sets_a_half_kilogram_load_down_gently(
         pytest.skip("the book (stiff contact: the robot's servo) with the first sensor face only")
     options = ("--load-kg", "0.5", "--surface", surface, "--clearance-mm", "2", TILT)
     name = f"conformance_{surface}_{pair[0].scheme}_{pair[1].scheme}"
-    count = itertools.count(1)
     done, contact, log, said = _repeat_after_host_stop(
-        name,
-        lambda: _place(name, pair, surface, calibration, options, tmp_path / f"run{next(count)}"),
+        name, lambda folder: _place(name, pair, surface, calibration, options, folder), tmp_path
     )
     assert done.returncode == 0, done.stdout + done.stderr + said
     assert "settled" in done.stdout
@@ -403,7 +403,6 @@ def _fault_run(
     name: str, pair: Pair, fault: Fault, folder: Path
 ) -> tuple[subprocess.CompletedProcess[str], Path, str]:
     """One fault run on a fresh twin: what ``run`` did, its log and what the twin said."""
-    folder.mkdir()
     truth, calibration, log = folder / "truth.json", folder / "cal.json", folder / "run.csv"
     options = ("--truth", str(truth), "--fault", fault.name, "--fault-at-s", str(FAULT_AT_S))
     with running_twin(name, *_faces(pair), *options) as twin:
@@ -429,10 +428,10 @@ def test_each_declared_fault_ends_run_as_declared_with_a_valid_log(
     name = f"conformance_fault_{pair[0].scheme}_{pair[1].scheme}_{fault.name}"
     # A stale stop is a stream-loss fault's own, once the twin injected it.
     declared = fault.run_says if fault.run_says != STALE else f"protective stop: {STALE}"
-    count = itertools.count(1)
     done, log, twin_said = _repeat_after_host_stop(
         name,
-        lambda: _fault_run(name, pair, fault, tmp_path / f"run{next(count)}"),
+        lambda folder: _fault_run(name, pair, fault, folder),
+        tmp_path,
         expected=declared if fault.run_says is not None else None,
     )
     _, rows = _rows(log)
