@@ -367,12 +367,13 @@ def test_run_sets_a_half_kilogram_load_down_gently(
     assert peak_N <= weight_N + 0.3 and last_N == pytest.approx(weight_N, abs=0.05)
 
 
-#: The fault comes this long after the robot's first client started streaming [s]: ``run``'s
-#: loop must be running by then (it connects, opens the sensor and enters its clock after its
-#: robot's stream starts: on a loaded host that took more than 1.5 s, and a fault before the
-#: loop's first cycle tests nothing).
-FAULT_AT_S = 3.0
-SECONDS = 5.5
+#: The fault comes this long after a client first commanded the arm [s]: ``run``'s loop's first
+#: cycle, so that the loop is running when it comes (a fault before the loop tests nothing). It
+#: was 3 s after the robot's stream started, since a loaded host took more than 1.5 s from that
+#: to the loop's first cycle (it opens the sensor and enters its clock in between).
+FAULT_AT_S = 0.5
+#: A fault run's length [s]: a fault within the limits leaves the run going this long.
+SECONDS = 2.5
 #: ``run``'s stale limit for a fast sensor in these runs [ms], not its default
 #: (:data:`DEFAULT_STALE_MS`). The twin, hardware's stand-in, shares the test host's two cores
 #: with ``run`` and pytest, and a Python cell at 500 Hz is held off now and then: its stream
@@ -444,7 +445,8 @@ def test_each_declared_fault_ends_run_as_declared_with_a_valid_log(
     assert done.returncode == 1, said
     assert fault.run_says in done.stderr and "the robot was stopped" in done.stderr, said
     assert f"{INJECTED} {fault.name}" in twin_said, said  # the stop is the fault's
-    # the run's clock starts with the robot's stream, the fault's clock too; a stale limit
-    # longer than the default sees a stream's loss that much later
+    # the run's clock starts with its loop's first cycle, the fault's with that cycle's command
+    # (as the twin's next period sees it); a stale limit longer than the default sees a
+    # stream's loss that much later
     later_s = (_stale_ms(pair[1]) - DEFAULT_STALE_MS) / 1000.0 if fault.run_says == STALE else 0.0
     assert t_last <= FAULT_AT_S + fault.seen_within_s + later_s, t_last

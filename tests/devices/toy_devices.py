@@ -74,6 +74,7 @@ class ToyRobotFace:
         self.listener = socket.create_server((host, ROBOT_PORT))
         self.clients: list[socket.socket] = []
         self.command: tuple[str, Any, float] = ("hold", None, 0.0)
+        self.moved = False  # a client commanded a move or a twist
         self.silent = False
         self.lines = 0
         threading.Thread(target=self._accept, daemon=True).start()
@@ -93,12 +94,13 @@ class ToyRobotFace:
                 message = json.loads(line)
                 kind = next(iter(message))
                 self.command = (kind, message[kind], self.cell.time())
+                self.moved = self.moved or kind in ("move", "twist")
 
     def uri(self) -> str:
         return f"toybot://{self.host}"
 
-    def streaming(self) -> bool:
-        return bool(self.clients)
+    def commanded(self) -> bool:
+        return self.moved
 
     def _error(self) -> np.ndarray:
         _, (p_target, rv_target), _ = self.command

@@ -5,9 +5,11 @@ from __future__ import annotations
 import socket
 import struct
 import time
+from typing import Any
 
 import pytest
 
+rtde_control = pytest.importorskip("rtde_control")
 rtde_receive = pytest.importorskip("rtde_receive")
 pytest.importorskip("mujoco")
 
@@ -23,17 +25,27 @@ def _wait_for(condition, timeout_s: float = 10.0) -> bool:  # type: ignore[no-un
     return False
 
 
+def _command_a_hold(host: str) -> Any:
+    """A client that commands the arm (a zero speedL): the twin's fault clock starts then."""
+    control = rtde_control.RTDEControlInterface(host)
+    control.speedL([0.0] * 6, 0.5, 0.0)
+    return control
+
+
 def test_a_protective_stop_on_demand_shows_in_the_safety_mode() -> None:
     with running_twin("twin_fault_pstop", "--fault", "protective-stop", "--fault-at-s", "0.2") as t:
         receive = rtde_receive.RTDEReceiveInterface(t.robot_host)
+        control = _command_a_hold(t.robot_host)
         assert _wait_for(lambda: receive.getSafetyMode() == 3)
         assert receive.getSafetyStatusBits() & 0b100
         receive.disconnect()
+        control.disconnect()
 
 
 def test_a_sensor_fault_on_demand_sets_the_serious_status_bit_of_every_record() -> None:
     with running_twin("twin_fault_sensor", "--fault", "sensor-fault", "--fault-at-s", "0.2") as t:
-        receive = rtde_receive.RTDEReceiveInterface(t.robot_host)  # starts the fault's clock
+        receive = rtde_receive.RTDEReceiveInterface(t.robot_host)
+        control = _command_a_hold(t.robot_host)  # starts the fault's clock
         rdt = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         rdt.settimeout(2.0)
         rdt.sendto(struct.pack(">HHI", 0x1234, 2, 0), (t.sensor_host, 49152))
@@ -45,3 +57,4 @@ def test_a_sensor_fault_on_demand_sets_the_serious_status_bit_of_every_record() 
         assert _wait_for(serious)
         rdt.close()
         receive.disconnect()
+        control.disconnect()

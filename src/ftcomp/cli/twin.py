@@ -121,7 +121,8 @@ def register(parser: argparse.ArgumentParser) -> None:
         "--fault-at-s",
         type=float,
         default=1.0,
-        help="when, after the first RTDE stream starts [s] (default 1)",
+        help="when, after a client first commands the arm to move (run: its loop's first "
+        "cycle) [s] (default 1)",
     )
     parser.add_argument(
         "--tcp-offset-mm",

@@ -109,6 +109,8 @@ _IK_STARTS: Final = 24
 _IK_SEED: Final = 34
 _REALTIME: Final = frozenset({6, 9, 10, 11, 24, 25, 26, 27, 38, 58, 66, 67, 68, 69, 70, 71})
 _STOP_COMMANDS: Final = frozenset({15, 16, 33, 34})
+#: rtde_control's motion commands: moveJ, moveJ_IK, moveL, moveL_FK, speedJ, speedL, servoL.
+_MOTION_COMMANDS: Final = frozenset({1, 2, 3, 4, 9, 10, 24})
 _IDLE, _READY, _DONE = 0, 1, 2
 #: ur_rtde 1.6's script commands by number, for the line naming one the twin does not model.
 _COMMAND_NAMES: Final = {
@@ -313,6 +315,8 @@ class UrController:
         self.servo_target: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
         self.servo_time = 0.002
         self.unknown: set[int] = set()
+        #: Whether a client commanded a motion (the twin's fault clock starts then).
+        self.commanded = False
 
     # ---------------------------------------------------------------- registers
     def write_input(self, name: str, value: float | int | tuple[float, ...]) -> None:
@@ -403,6 +407,7 @@ class UrController:
         self._enter_hold()
 
     def _process(self, cmd: int) -> None:
+        self.commanded = self.commanded or cmd in _MOTION_COMMANDS
         if cmd == 1:  # moveJ
             self._start_joint_move(self._q_in(0), "moveJ")
         elif cmd == 2:  # moveJ_IK

@@ -50,8 +50,10 @@ class RobotFace(Protocol):
         """The URI that opens it live (``ur://127.0.0.2``)."""
         ...
 
-    def streaming(self) -> bool:
-        """Whether a client streams from it now (the fault clock starts then)."""
+    def commanded(self) -> bool:
+        """Whether a client has commanded the arm to move (a joint or Cartesian move, a speed
+        or a servo target): the fault clock starts then, in ``run`` with its loop's first
+        cycle."""
         ...
 
     def cycle(self, contact_force_N: float) -> None:

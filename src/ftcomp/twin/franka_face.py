@@ -153,8 +153,8 @@ class FrankaFace:
         # simulates the arm is not a real-time control host (docs/hardware.md).
         return f"franka://{self.host}?realtime=ignore"
 
-    def streaming(self) -> bool:
-        return bool(self.server.udp_connected)
+    def commanded(self) -> bool:
+        return self.server.commanded
 
     def cycle(self, contact_force_N: float) -> None:
         server = self.server
@@ -311,6 +311,8 @@ def server_with_errors(franky_sim: Any, protocol: Any) -> Any:
             self.abort_owed: Any = None
             self.new_commands: collections.deque[bool] = collections.deque(maxlen=_SUCCESS_WINDOW)
             self.new_command = False
+            #: Whether a client started a motion (the twin's fault clock starts then).
+            self.commanded = False
 
         def _pre_process_commands(self) -> None:
             super()._pre_process_commands()
@@ -329,6 +331,7 @@ def server_with_errors(franky_sim: Any, protocol: Any) -> Any:
 
         def start_motion(self, controller_mode: Any, generator_mode: Any, motion_id: int) -> None:
             super().start_motion(controller_mode, generator_mode, motion_id)
+            self.commanded = True
             self.new_commands.clear()
             self.abort_owed = self.refusal(controller_mode)
 

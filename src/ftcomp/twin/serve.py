@@ -98,7 +98,8 @@ class TwinConfig:
         truth_path: write the true tool, bias, tilt and mount here (JSON), or None.
         contact_log_path: write the contact log here (CSV), or None.
         fault: a fault one of the two faces declares, or None.
-        fault_at_s: when, after the first client started streaming from the robot [s].
+        fault_at_s: when, after a client first commanded the arm to move [s] (``run``: its
+            loop's first cycle).
         realtime: ask for SCHED_FIFO for the loop and the faces' senders (as ur_rtde does).
         sensor_rate_hz: the sensor face's output rate [Hz] (None: the face's default, or the
             simulated sensor's), within the face's fastest; each sample a fresh draw (noise
@@ -209,8 +210,8 @@ class TwinResult:
         contact: with a load and a surface, what the surface carried (the truth a client's
             placement is judged by: ``the surface carries 4.901 N of the load's 4.903 N at
             the end, at most 4.950 N``); empty otherwise.
-        fault: with a fault, whether it came (``injected the fault bota-overrange 3 s after a
-            client first streamed``, or that it did not: the run ended first); empty
+        fault: with a fault, whether it came (``injected the fault bota-overrange 0.5 s after a
+            client first commanded the arm``, or that it did not: the run ended first); empty
             otherwise.
     """
 
@@ -278,11 +279,12 @@ class _Twin:
         self.contact_last_N = 0.0
 
     def _fire_fault(self, now: float) -> None:
-        """The fault on its face(s) once ``fault_at_s`` passed since a client first streamed."""
+        """The fault on its face(s) once ``fault_at_s`` passed since a client first commanded
+        the arm."""
         fault = self.config.fault
         if fault is None or self.fault_fired:
             return
-        if self.started_at is None and self.robot.streaming():
+        if self.started_at is None and self.robot.commanded():
             self.started_at = now
         if self.started_at is None or now - self.started_at < self.config.fault_at_s:
             return
@@ -331,7 +333,7 @@ class _Twin:
         if fault is None:
             return ""
         if self.fault_fired:
-            return f"injected the fault {fault} {at_s:g} s after a client first streamed"
+            return f"injected the fault {fault} {at_s:g} s after a client first commanded the arm"
         return f"did not inject the fault {fault}: the twin ended first"
 
     def _carries_a_load(self) -> bool:

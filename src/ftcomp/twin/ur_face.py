@@ -186,8 +186,8 @@ class UrFace:
     def uri(self) -> str:
         return f"ur://{self.host}"
 
-    def streaming(self) -> bool:
-        return any(s.started for s in self.sessions)
+    def commanded(self) -> bool:
+        return self.controller.commanded
 
     def cycle(self, contact_force_N: float) -> None:
         self.cell.command_twist(self.controller.cycle(contact_force_N))
