@@ -64,3 +64,57 @@ def identified_tool() -> GravityModel:
     cell = SimPlacementCell("sponge", 0.5, seed=99, identify_samples_per_pose=200)
     assert cell.identified is not None
     return cell.identified.model
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist's own hook reads the groups
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """How pytest-xdist's workers (``-n``, ``--dist loadgroup``) share the tests.
+
+    - The ``live`` modules (a twin, a client's real-time loop, a ROS 2 graph) run one test at
+      a time, all on one worker: two at once on the two cores starved each other's streams
+      (a Net F/T twin silent past pynetft's 100 ms time-out).
+    - The tests that share a module-scoped fixture go to one worker, so that it is set up
+      once, not once per worker that draws one of them.
+    - Every other test goes to whichever worker is free.
+    """
+    if not config.pluginmanager.hasplugin("xdist"):
+        return
+    for item in items:
+        if item.get_closest_marker("live") is not None:
+            item.add_marker(pytest.mark.xdist_group("live"))
+            continue
+        # The fixtures' scopes are known only from pytest's own (private) fixture info.
+        info = getattr(item, "_fixtureinfo", None)
+        if info is None:
+            continue
+        shared = sorted(
+            name
+            for name, defs in info.name2fixturedefs.items()
+            if defs and defs[-1].scope in ("module", "package", "class")
+        )
+        if not shared:
+            continue
+        callspec = getattr(item, "callspec", None)
+        indices = callspec.indices if callspec is not None else {}
+        key = item.nodeid.split("::")[0] + "".join(
+            f"[{name}={indices[name]}]" for name in shared if name in indices
+        )
+        item.add_marker(pytest.mark.xdist_group(key))
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """Stop a run whose groups pytest-xdist would ignore (a grouped test's node id carries its
+    group once xdist's own hook has run): the live tests would run two at a time."""
+    if not getattr(session.config.option, "loadgroup", False):
+        return
+    lost = [
+        item.nodeid
+        for item in session.items
+        if item.get_closest_marker("xdist_group") is not None and "@" not in item.nodeid
+    ]
+    if lost:
+        raise pytest.UsageError(
+            f"pytest-xdist ignored the test groups ({lost[0]} has none): this pytest and "
+            "pytest-xdist do not work together (pyproject.toml pins them)"
+        )

@@ -30,6 +30,11 @@ from standins.scenario import HAND_GUIDED_DEG, TOOL_MODEL, Scenario, rotvecs
 SE_BOUND = 4.0
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def test_record_on_sim_drives_the_paper_poses_and_calibrate_recovers_the_truth(
     tmp_path: Path,
 ) -> None:

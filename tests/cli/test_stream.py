@@ -26,6 +26,11 @@ RATE_HZ = 1000.0
 RATE_TOLERANCE = 0.05
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def _scenario(**options: object) -> Scenario:
     return Scenario(
         t0=time.monotonic(),

@@ -78,6 +78,11 @@ CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"
 PAIRS_ENV = "FTCOMP_CONFORMANCE_PAIRS"
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def _first(kind: str) -> str:
     """The first face of a kind (the registry's order): the partner each face of the other
     kind is run with, its faults and the book placement too."""

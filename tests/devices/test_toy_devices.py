@@ -26,6 +26,11 @@ HERE = Path(__file__).resolve().parent
 MODULE = "ftcomp_toy_devices_under_test"
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 @pytest.fixture(scope="module")
 def env(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     folder = tmp_path_factory.mktemp("toy")
@@ -75,7 +80,8 @@ SUITE = str(HERE / "test_conformance.py")
 def _collected(env: dict[str, str]) -> set[str]:
     """The conformance suite's test ids (what is in brackets) with ``env``."""
     collected = subprocess.run(
-        [sys.executable, "-m", "pytest", SUITE, "--collect-only", "-q", "-p", "no:cacheprovider"],
+        [sys.executable, "-m", "pytest", SUITE, "--collect-only", "-q", "-p", "no:cacheprovider",
+         "-n", "0"],
         capture_output=True, text=True, env=env, timeout=120, check=False, cwd=HERE.parent.parent,
     )  # fmt: skip
     return set(re.findall(r"\[([^\]]+)\]", collected.stdout))
@@ -97,7 +103,8 @@ def test_the_conformance_suite_runs_every_pair_and_the_toy_pair_passes(
     assert "ur5e-toyft-toyft-silent" in ids and "toybot-netft-toybot-silent" in ids
     assert "toybot-toyft-toyft-silent" not in ids
     run = subprocess.run(
-        [sys.executable, "-m", "pytest", SUITE, "-q", "-p", "no:cacheprovider", "-k",
+        # in one process (-n 0): this test's worker is the live tests' one (conftest.py)
+        [sys.executable, "-m", "pytest", SUITE, "-q", "-p", "no:cacheprovider", "-n", "0", "-k",
          "toybot-toyft or ur5e-toyft-toyft-silent or toybot-netft-toybot-silent"],
         capture_output=True, text=True, env=env, timeout=600, check=False, cwd=HERE.parent.parent,
     )  # fmt: skip

@@ -27,6 +27,11 @@ ROBOT_CAPABILITIES = (TakesControl, ReportsLateness, ChecksReachability)
 SENSOR_CAPABILITIES = (CountsLostPackets, ReportsStreamHealth)
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def _replay_file(path: Path) -> str:
     rows = ["t,fx,fy,fz,tx,ty,tz,qx,qy,qz,qw"]
     rows += [f"{0.002 * k},0,0,1,0,0,0,0,0,0,1" for k in range(5)]

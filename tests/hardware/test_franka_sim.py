@@ -65,6 +65,11 @@ SIM_MAX_S = 300
 _NICE_AND_BOUNDED = ("nice", "-n", "19", "timeout", "-s", "KILL", str(SIM_MAX_S))
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 class Sim:
     """The running simulator: its address and process group (to stop and resume it)."""
 

@@ -69,6 +69,11 @@ face.close()
 """
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 @contextmanager
 def serving(kind: str, host: str) -> Iterator[tuple[str, subprocess.Popen[str]]]:
     proc = subprocess.Popen(

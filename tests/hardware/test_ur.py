@@ -29,6 +29,11 @@ REAL_CONTROL = rtde_control.RTDEControlInterface
 EXACT = 1e-12
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def _scenario(**options: object) -> Scenario:
     settings: dict[str, object] = {"max_s": 10.0, **options}
     return Scenario(

@@ -36,6 +36,11 @@ from ftcomp.ros2.live import WrenchPublisher
 WAIT = "&timeout_s=120"
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 @pytest.fixture
 def urdf(tmp_path: Path) -> Path:
     path = tmp_path / "two_joint.urdf"

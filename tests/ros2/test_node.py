@@ -50,6 +50,10 @@ from ftcomp.ros2.rclpy_runtime import (
     wrench_of,
 )
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
 
 @pytest.fixture
 def files(tmp_path: Path) -> dict[str, str]:

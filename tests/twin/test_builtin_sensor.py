@@ -27,6 +27,11 @@ ROTVEC_RAD = (0.0, 0.3, 0.5)
 AXES = ("fx", "fy", "fz", "tx", "ty", "tz")
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def test_the_flange_wrench_the_twin_reports_converts_back_to_the_tcp_wrench() -> None:
     rng = np.random.default_rng(3)
     wrench_tcp = rng.normal(size=6)

@@ -20,6 +20,11 @@ WEIGHT_N = 4.905
 PLACE = "sim://?seed=4&tilt_deg=0,0&surface=sponge&load_kg=0.5&grasp=1&clearance_mm=2"
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def test_the_verdict_reports_the_lateral_force_and_keeps_its_judgement() -> None:
     v = judge_placement("placed", WEIGHT_N - 0.03, 0.0, WEIGHT_N, 0.25, lateral_N=1.7)
     assert v.verdict == "placed gently"

@@ -29,6 +29,11 @@ POSITION_M = np.array([0.45, 0.0, 0.42])
 _MOVEL, _DONE = 3, 2
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def _visit(poses: np.ndarray) -> tuple[int, np.ndarray]:
     """Drive the twin's controller through moveLs to each orientation at ``POSITION_M`` (0.25
     m/s, 1.5 m/s^2, as record's URI in the docs); return how many completed and the

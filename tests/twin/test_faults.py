@@ -15,6 +15,10 @@ pytest.importorskip("mujoco")
 
 from standins.twin_process import running_twin  # noqa: E402
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
 
 def _wait_for(condition, timeout_s: float = 10.0) -> bool:  # type: ignore[no-untyped-def]
     deadline = time.monotonic() + timeout_s

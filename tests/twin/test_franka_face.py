@@ -30,6 +30,11 @@ DESCENT_M_S = 0.01
 THRESHOLD_N = 8.0
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def _descend_until_stopped(robot: object, seconds: float) -> str | None:
     """Command the descent each period until the arm stops on an error or ``seconds`` pass;
     the error's line. (Its text only: the exception's traceback holds the frames that hold

@@ -30,6 +30,11 @@ OFFSET_M = np.array([0.0, 0.0, 0.025])
 ROTVEC = np.array([0.0, 0.0, 0.5])
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def _at_rest(receive: object, timeout_s: float = 5.0) -> None:
     """Wait until the arm is still: every joint slower than 1 mrad/s in 25 packages running."""
     still, deadline = 0, time.monotonic() + timeout_s

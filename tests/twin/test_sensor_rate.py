@@ -16,6 +16,11 @@ pynetft = pytest.importorskip("pynetft")
 RATE_HZ = 5000.0
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 @pytest.mark.parametrize("rate", ["0", "7001", "nan"])
 def test_twin_refuses_a_sensor_rate_outside_a_net_fts_range(
     rate: str, capsys: pytest.CaptureFixture[str]

@@ -36,6 +36,11 @@ UR5E_COM_M = (
 )
 
 
+#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
+#: tests at a time (conftest.py).
+pytestmark = pytest.mark.live
+
+
 def ur_dh_product(q: np.ndarray) -> np.ndarray:
     """``T_base_flange`` (4, 4): the product of UR's published rows, written out here."""
     T = np.eye(4)
