@@ -30,8 +30,6 @@ from standins.scenario import HAND_GUIDED_DEG, TOOL_MODEL, Scenario, rotvecs
 SE_BOUND = 4.0
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

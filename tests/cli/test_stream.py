@@ -26,8 +26,6 @@ RATE_HZ = 1000.0
 RATE_TOLERANCE = 0.05
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

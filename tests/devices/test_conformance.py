@@ -78,8 +78,6 @@ CLIENT = "import sys; from ftcomp.cli import main; sys.exit(main())"
 PAIRS_ENV = "FTCOMP_CONFORMANCE_PAIRS"
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

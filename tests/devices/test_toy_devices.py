@@ -26,8 +26,6 @@ HERE = Path(__file__).resolve().parent
 MODULE = "ftcomp_toy_devices_under_test"
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

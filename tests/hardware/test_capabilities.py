@@ -27,8 +27,6 @@ ROBOT_CAPABILITIES = (TakesControl, ReportsLateness, ChecksReachability)
 SENSOR_CAPABILITIES = (CountsLostPackets, ReportsStreamHealth)
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

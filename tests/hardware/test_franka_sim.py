@@ -65,8 +65,6 @@ SIM_MAX_S = 300
 _NICE_AND_BOUNDED = ("nice", "-n", "19", "timeout", "-s", "KILL", str(SIM_MAX_S))
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -18,8 +18,6 @@ pytest.importorskip("pynetft")
 from standins.launch import loopback_address, running
 from standins.scenario import TOOL_MODEL, Scenario, rotvecs
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

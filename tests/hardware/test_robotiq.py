@@ -69,8 +69,6 @@ face.close()
 """
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

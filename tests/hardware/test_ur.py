@@ -29,8 +29,6 @@ REAL_CONTROL = rtde_control.RTDEControlInterface
 EXACT = 1e-12
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

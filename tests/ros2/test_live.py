@@ -36,8 +36,6 @@ from ftcomp.ros2.live import WrenchPublisher
 WAIT = "&timeout_s=120"
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -50,8 +50,6 @@ from ftcomp.ros2.rclpy_runtime import (
     wrench_of,
 )
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

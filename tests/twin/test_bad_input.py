@@ -11,8 +11,6 @@ from ftcomp.cli import main
 BASE = ("twin", "--robot-host", "127.0.0.5", "--sensor-host", "127.0.0.6", "--seconds", "1")
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -38,8 +38,6 @@ GAP_S = 10.0
 MOVED = re.compile(r"bias tracking: (\d+) updates, the bias moved by \[(\S+) (\S+) (\S+)\]")
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

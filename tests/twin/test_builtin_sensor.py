@@ -27,8 +27,6 @@ ROTVEC_RAD = (0.0, 0.3, 0.5)
 AXES = ("fx", "fy", "fz", "tx", "ty", "tz")
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -20,8 +20,6 @@ WEIGHT_N = 4.905
 PLACE = "sim://?seed=4&tilt_deg=0,0&surface=sponge&load_kg=0.5&grasp=1&clearance_mm=2"
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

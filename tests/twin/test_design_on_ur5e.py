@@ -29,8 +29,6 @@ POSITION_M = np.array([0.45, 0.0, 0.42])
 _MOVEL, _DONE = 3, 2
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -15,8 +15,6 @@ pytest.importorskip("mujoco")
 
 from standins.twin_process import running_twin  # noqa: E402
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -36,8 +36,6 @@ KEYS = ("tool_weight_N", "center_of_gravity_m", "force_bias_N", "torque_bias_Nm"
 Z_MAX = 4.06
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -30,8 +30,6 @@ DESCENT_M_S = 0.01
 THRESHOLD_N = 8.0
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

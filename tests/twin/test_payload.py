@@ -30,8 +30,6 @@ OFFSET_M = np.array([0.0, 0.0, 0.025])
 ROTVEC = np.array([0.0, 0.0, 0.5])
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -17,8 +17,6 @@ pytest.importorskip("mujoco")
 from ftcomp.frames import matrix_from_rotvec  # noqa: E402
 from standins.twin_process import Twin, running_twin  # noqa: E402
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

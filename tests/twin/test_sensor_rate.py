@@ -16,8 +16,6 @@ pynetft = pytest.importorskip("pynetft")
 RATE_HZ = 5000.0
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -36,8 +36,6 @@ UR5E_COM_M = (
 )
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 

@@ -24,8 +24,6 @@ SUBPROTOCOLS = ["foxglove.websocket.v1", "foxglove.sdk.v1"]
 WANTED = 200  # 0.4 s of the twin's 500 Hz rows
 
 
-#: Drives real-time processes (a twin, a client's loop, a ROS 2 graph): one such module's
-#: tests at a time (conftest.py).
 pytestmark = pytest.mark.live
 
 
