@@ -73,7 +73,7 @@ def _serve_sessions(server: socket.socket, sessions: list[RtdeSession], until: f
         except TimeoutError:
             continue
         conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        session = RtdeSession(conn, VERSION, lambda name, value: None)
+        session = RtdeSession(conn, VERSION, lambda package: None)
         sessions.append(session)
         threading.Thread(target=session.serve, daemon=True).start()
 

@@ -46,17 +46,20 @@ def _visit(poses: np.ndarray) -> tuple[int, np.ndarray]:
         cell.wait_cycle()
 
     for k, R in enumerate(poses):
-        for i, value in enumerate([*POSITION_M, *rotvec_from_matrix(R), 0.25, 1.5]):
-            ctl.write_input(f"input_double_register_{i}", float(value))
-        ctl.write_input("input_int_register_1", 0)  # blocking
-        ctl.write_input("input_int_register_0", _MOVEL)
+        values = [*POSITION_M, *rotvec_from_matrix(R), 0.25, 1.5]
+        package: dict[str, float | int | tuple[float, ...]] = {
+            f"input_double_register_{i}": float(value) for i, value in enumerate(values)
+        }
+        package["input_int_register_1"] = 0  # blocking
+        package["input_int_register_0"] = _MOVEL
+        ctl.write_inputs(package)
         for _ in range(10_000):  # 20 s of controller time: a move takes at most 3.5 s
             cycle()
             if ctl.registers.get("output_int_register_0") == _DONE or not ctl.script_running:
                 break
         if not ctl.script_running:
             return k, cell.q_command_rad
-        ctl.write_input("input_int_register_0", 0)
+        ctl.write_inputs({"input_int_register_0": 0})
         cycle()
     return len(poses), cell.q_command_rad
 

@@ -57,6 +57,7 @@ import math
 import re
 import sys
 import threading
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Final
 
@@ -319,9 +320,15 @@ class UrController:
         self.commanded = False
 
     # ---------------------------------------------------------------- registers
-    def write_input(self, name: str, value: float | int | tuple[float, ...]) -> None:
-        """Set one RTDE input (called from the RTDE sessions' threads)."""
-        self.inputs[name] = value
+    def write_inputs(self, package: Mapping[str, float | int | tuple[float, ...]]) -> None:
+        """Apply one RTDE input package whole (called from the RTDE sessions' threads).
+
+        It waits for the cycle's lock: a cycle that read the registers between two fields of
+        one package would see a new command with the previous command's arguments (an inverse
+        kinematics question asked of a moveJ's joints, answered "no solution").
+        """
+        with self.lock:
+            self.inputs.update(package)
 
     def _in_int(self, i: int) -> int:
         return int(self.inputs.get(f"input_int_register_{i + self.offset_int}", 0))  # type: ignore[arg-type]

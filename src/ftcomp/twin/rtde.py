@@ -181,7 +181,8 @@ class RtdeSession:
     Args:
         conn: the accepted TCP connection.
         version: the controller version reported (major, minor, bugfix, build).
-        write_input: called with ``(name, value)`` for each input the client sets.
+        write_inputs: called with one input package, whole (``{name: value}``): a UR controller
+            applies a package in one cycle, so a cycle never sees half of one.
         cycle_hz: the controller's cycle rate [Hz]; output frequencies must divide it.
     """
 
@@ -189,12 +190,12 @@ class RtdeSession:
         self,
         conn: socket.socket,
         version: tuple[int, int, int, int],
-        write_input: Callable[[str, float | int | tuple[float, ...]], None],
+        write_inputs: Callable[[dict[str, float | int | tuple[float, ...]]], None],
         cycle_hz: float = 500.0,
     ) -> None:
         self.conn = conn
         self.version = version
-        self.write_input = write_input
+        self.write_inputs = write_inputs
         self.cycle_hz = cycle_hz
         self.send_lock = threading.Lock()
         self.outputs: list[str] = []
@@ -237,11 +238,13 @@ class RtdeSession:
             if recipe is not None:
                 names, fmt = recipe
                 values = fmt.unpack(payload[1 : 1 + fmt.size])
+                package: dict[str, float | int | tuple[float, ...]] = {}
                 k = 0
                 for name in names:
                     n = _WIDTH.get(rtde_type(name, output=False), 1)
-                    self.write_input(name, values[k] if n == 1 else tuple(values[k : k + n]))
+                    package[name] = values[k] if n == 1 else tuple(values[k : k + n])
                     k += n
+                self.write_inputs(package)
         elif kind == "V":
             (requested,) = struct.unpack(">H", payload[:2])
             self._send("V", b"\x01" if requested == 2 else b"\x00")

@@ -176,7 +176,7 @@ class UrFace:
         return ports
 
     def _rtde_session(self, conn: socket.socket) -> None:
-        session = RtdeSession(conn, _VERSION, self.controller.write_input)
+        session = RtdeSession(conn, _VERSION, self.controller.write_inputs)
         with self.sessions_lock:
             self.packets_closed += sum(s.packets for s in self.sessions if s.closed)
             self.sessions = [s for s in self.sessions if not s.closed] + [session]
