@@ -3,9 +3,12 @@ of the control side checked against the installed ``RTDEControlInterface``."""
 
 from __future__ import annotations
 
+import contextlib
+import os
 import re
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -167,8 +170,7 @@ def test_every_control_call_the_backend_makes_exists_with_that_signature(
         "speedStop",
         "servoStop",
         "stopScript",
-        "disconnect",
-    }
+    }  # no disconnect: dropping the interface disconnects it (URRobot.__exit__)
     assert set(CheckedControl.calls) == expected
 
 
@@ -358,3 +360,43 @@ def test_bad_configurations_are_one_clear_error_in_bounded_time(
                 pass
     assert message in str(info.value) and "\n" not in str(info.value)
     assert time.monotonic() - t < 3.0  # the connection check gives up after 1 s
+
+
+def _tcp_connections_to(host: str) -> int:
+    """This process's established TCP connections to ``host`` (its sockets' inodes among the
+    kernel's connection table, ``/proc/net/tcp``)."""
+    inodes = set()
+    for fd in Path("/proc/self/fd").iterdir():
+        with contextlib.suppress(OSError):
+            target = os.readlink(fd)
+            if target.startswith("socket:["):
+                inodes.add(target[8:-1])
+    remote = "".join(f"{int(part):02X}" for part in reversed(host.split(".")))
+    count = 0
+    for line in Path("/proc/net/tcp").read_text().splitlines()[1:]:
+        fields = line.split()
+        established = fields[3] == "01"
+        if established and fields[2].startswith(remote + ":") and fields[9] in inodes:
+            count += 1
+    return count
+
+
+@pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="needs Linux's /proc/net/tcp")
+def test_leaving_the_robot_closes_every_connection_to_the_controller(
+    request: pytest.FixtureRequest,
+) -> None:
+    """The interfaces are disconnected by their destructors (no explicit ``disconnect``, which
+    paid ur_rtde's 0.5 s sleep twice): nothing may keep one alive past the block."""
+    pytest.importorskip("mujoco")
+    from standins.twin_process import running_twin
+
+    with running_twin(request.node.name, seconds=120.0) as twin:  # it serves the control side
+        with open_robot(twin.robot_uri) as robot:
+            robot.connect_control()
+            robot.command_twist(np.array([0.0, 0.0, 0.001, 0.0, 0.0, 0.0]))
+            robot.wait_cycle()
+            assert robot.control is not None
+            during = _tcp_connections_to(twin.robot_host)
+        after = _tcp_connections_to(twin.robot_host)
+    assert during >= 3, during  # receive, control's RTDE, its script and dashboard clients
+    assert after == 0, after

@@ -22,7 +22,9 @@ pytestmark = pytest.mark.live
 
 @pytest.fixture(scope="module")
 def twin() -> Iterator[Twin]:
-    with running_twin("test_rtde_control", seconds=60.0) as t:
+    # It serves the whole module (about 20 s on a quiet host); the block's end stops it. A twin
+    # that ended by itself under the clients would leave ur_rtde reconnecting into nothing.
+    with running_twin("test_rtde_control", seconds=300.0) as t:
         yield t
 
 
