@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["MEASURE_JS", "QUIET_NETWORK_FLAGS", "chromium_binary", "measure_page"]
+__all__ = ["MEASURE_JS", "chromium_binary", "measure_page"]
 
 #: In the page: the viewport width, every image and whether it loaded, every element that
 #: reaches beyond the viewport on either side.
@@ -61,7 +61,7 @@ MEASURE_JS = """
 #: host. Without these a start sent about 200 packets on eth0 (name look-ups, the component
 #: updater, its background services); every host name now resolves to nothing, and anything
 #: that still asks for the network meets a dead proxy on loopback (port 9, discard).
-QUIET_NETWORK_FLAGS = (
+_QUIET_NETWORK_FLAGS = (
     "--host-resolver-rules=MAP * ~NOTFOUND",
     "--proxy-server=127.0.0.1:9",
     "--proxy-bypass-list=<-loopback>",
@@ -161,7 +161,7 @@ def measure_page(
         "--hide-scrollbars",
         "--remote-debugging-pipe",
         f"--user-data-dir={profile}",
-        *QUIET_NETWORK_FLAGS,
+        *_QUIET_NETWORK_FLAGS,
     ]
     if hasattr(os, "geteuid") and os.geteuid() == 0:
         args.append("--no-sandbox")  # Chromium refuses to run as root with its sandbox
