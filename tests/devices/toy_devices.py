@@ -34,6 +34,10 @@ ROBOT_PORT, SENSOR_PORT = 47001, 47002
 PERIOD_S = 0.004
 TWIST_HOLD_S = 0.1
 SILENCE_S = 0.1
+#: At rest: the pose moved less than this between two state lines (0.25 mm/s, 2.5 mrad/s) ...
+STILL_STEP_M, STILL_TURN_RAD = 1e-6, 1e-5
+#: ... for this long [s] (a UR's rule: hardware/ur.py).
+STILL_S = 0.1
 
 DEVICES = (
     Device(
@@ -273,9 +277,25 @@ class ToyRobot:
         raise HardwareError("toybot: the move did not end")
 
     def settle(self, max_duration_s: float) -> float:
+        """Hold, then wait until the reported pose has kept still for :data:`STILL_S`: a move
+        ends within 0.1 mm of its target, still approaching, and a hold stops the arm through
+        its servo; readings taken before it is at rest see the tool's inertia."""
         start = time.monotonic()
         self._send({"hold": 1})
         self._wait_new(self.count + 2, SILENCE_S * 5)
+        still_since, last = time.monotonic(), self.pose()
+        while time.monotonic() - still_since < STILL_S:
+            if time.monotonic() - start > max_duration_s:
+                raise HardwareError(f"toybot: still moving after {max_duration_s:g} s")
+            self._wait_new(self.count, SILENCE_S)
+            here = self.pose()
+            step_m = float(np.linalg.norm(here.p_base_tcp - last.p_base_tcp))
+            turn_rad = float(
+                np.linalg.norm(rotvec_from_matrix(here.R_base_tcp @ last.R_base_tcp.T))
+            )
+            if step_m > STILL_STEP_M or turn_rad > STILL_TURN_RAD:
+                still_since = time.monotonic()
+            last = here
         return time.monotonic() - start
 
     def command_twist(self, twist_base: np.ndarray) -> None:
