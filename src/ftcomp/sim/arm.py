@@ -302,6 +302,10 @@ class DHArmSpec:
         rows = zip(q_rad, self.dh_a_m, self.dh_d_m, self.dh_alpha_rad, strict=True)
         return [self._row(q, a, d, alpha) for q, a, d, alpha in rows]
 
+    def row_transform(self, i: int, q: float) -> NDArray[np.float64]:
+        """``T_{i,i+1}``: row ``i`` (0-based) of the table at joint position ``q`` [rad], (4, 4)."""
+        return self._row(q, self.dh_a_m[i], self.dh_d_m[i], self.dh_alpha_rad[i])
+
     def flange_transform(self) -> NDArray[np.float64]:
         """``T_{N,flange}``: the fixed flange row, (4, 4) (the identity without one)."""
         return self._row(0.0, self.flange_a_m, self.flange_d_m, self.flange_alpha_rad)

@@ -41,10 +41,10 @@ commanded joints, with a feedback on the joint error).
 
 Inverse kinematics (``getInverseKinematics``, ``moveJ_IK``, the has-solution checks): the
 configuration within the joint ranges nearest ``qnear`` (the commanded joints when none is
-given), found by damped least squares from ``qnear`` first, then from the arm's home and a
-fixed set of starts, each joint then turned by whole turns to the value nearest ``qnear``
-within its range. UR's own solver is analytic and picks among its eight branches; this one
-finds the branch nearest ``qnear`` in practice, not by construction.
+given): as UR's own solver, in closed form (:mod:`ftcomp.sim.ur_kinematics`), each of the
+up to eight branches with its joints turned by whole turns to the values nearest ``qnear``
+within their ranges, the branch nearest ``qnear`` (Euclidean) that the simulated arm's forward
+kinematics confirms.
 
 Not modelled: ``servoL``'s ``lookahead_time`` and ``gain`` (the target is reached within ``t``),
 force mode, freedrive, jogging, contact detection, path moves (each ends the program, see
@@ -65,11 +65,12 @@ import mujoco
 import numpy as np
 from numpy.typing import NDArray
 
+from ftcomp.errors import ParameterError
 from ftcomp.frames import matrix_from_rotvec, rotvec_from_matrix
 from ftcomp.sim.arm import ARM_JOINT_NAMES
 from ftcomp.sim.cell import SimCell
-from ftcomp.sim.ik import solve_pose
 from ftcomp.sim.scene import NAMES
+from ftcomp.sim.ur_kinematics import is_ur_shaped, ur_inverse_kinematics
 
 __all__ = [
     "PROTECTIVE_STOP_FORCE_N",
@@ -103,11 +104,9 @@ _HELD_RAD: Final = math.radians(0.5)
 _ARRIVED_JOINT_RAD: Final = 1e-4
 _HELD_JOINT_RAD: Final = math.radians(0.5)
 _JOINT_GAIN_PER_S: Final = 40.0
-#: Starts of the inverse kinematics after ``qnear`` and the home configuration: drawn once,
-#: uniform within the joint ranges (a fixed seed: the same pose and ``qnear`` give the same
-#: answer in every twin).
-_IK_STARTS: Final = 24
-_IK_SEED: Final = 34
+#: An inverse kinematics answer puts the TCP within this of the pose asked [m, rad] (forward
+#: kinematics of the simulated arm).
+_IK_TOLERANCE: Final = 1e-9
 _REALTIME: Final = frozenset({6, 9, 10, 11, 24, 25, 26, 27, 38, 58, 66, 67, 68, 69, 70, 71})
 _STOP_COMMANDS: Final = frozenset({15, 16, 33, 34})
 #: rtde_control's motion commands: moveJ, moveJ_IK, moveL, moveL_FK, speedJ, speedL, servoL.
@@ -293,8 +292,10 @@ class UrController:
         self._n = cell.n_joints
         lower, upper = cell.joint_range_rad
         self._lower, self._upper = lower, upper
-        draws = np.random.default_rng(_IK_SEED).random((_IK_STARTS, self._n))
-        self._ik_starts = [np.array(cell.config.arm.home_q_rad), *(lower + (upper - lower) * draws)]
+        arm = cell.config.arm
+        if not is_ur_shaped(arm):
+            raise ParameterError("the UR controller needs a UR arm's kinematics (ur_kinematics)")
+        self._arm = arm
         self._jacp = np.zeros((3, cell.model.nv))
         self._jacr = np.zeros((3, cell.model.nv))
         self._site = cell.model.site(NAMES["ft_site"]).id
@@ -524,29 +525,24 @@ class UrController:
         near = self.cell.q_command_rad if qnear is None else np.asarray(qnear, dtype=float)
         if near.shape != (self._n,) or not np.isfinite(near).all():
             return None
-        Rwb = self._R_base_world.T
-        q = solve_pose(
-            self.cell.model,
-            self._ik_data,
-            self._site,
-            np.arange(self._n, dtype=np.intp),
-            np.arange(self._n, dtype=np.intp),
-            Rwb @ p_base_tcp,
-            Rwb @ R_base_tcp,
-            [np.clip(near, self._lower, self._upper), *self._ik_starts],
-            self._lower,
-            self._upper,
-        )
-        if q is None:
-            return None
-        # Each joint by whole turns to the value nearest qnear within its range.
+        p_ft, R_ft = self._tcp_offset()
+        R_flange = R_base_tcp @ R_ft.T
+        p_flange = p_base_tcp - R_flange @ p_ft
         turn = 2.0 * math.pi
-        nearest = q + turn * np.round((near - q) / turn)
-        for shift in (0.0, turn, -turn):
-            nearest = np.where(
-                (nearest < self._lower) | (nearest > self._upper), nearest + shift, nearest
-            )
-        return np.where((nearest >= self._lower) & (nearest <= self._upper), nearest, q)
+        candidates = []
+        for q in ur_inverse_kinematics(self._arm, p_flange, R_flange, float(near[5])):
+            # each joint by whole turns to the value nearest qnear within its range
+            nearest = q + turn * np.round((near - q) / turn)
+            nearest = np.where(nearest > self._upper, nearest - turn, nearest)
+            nearest = np.where(nearest < self._lower, nearest + turn, nearest)
+            if np.all((nearest >= self._lower) & (nearest <= self._upper)):
+                candidates.append(nearest)
+        candidates.sort(key=lambda q: float(np.linalg.norm(q - near)))
+        for q in candidates:
+            p, R = self.forward_kinematics(q)
+            if max(np.max(np.abs(p - p_base_tcp)), np.max(np.abs(R - R_base_tcp))) < _IK_TOLERANCE:
+                return q
+        return None
 
     def _joint_twist(self, qd: NDArray[np.float64]) -> NDArray[np.float64]:
         """The TCP twist (base frame) that joint velocities ``qd`` give at the commanded joints
