@@ -205,6 +205,44 @@ def test_a_move_that_ends_away_from_its_target_is_an_error(
             robot.move_pose(here.p_base_tcp + np.array([0.0, 0.0, 0.01]), here.R_base_tcp, 1.0)
 
 
+@pytest.mark.parametrize(
+    ("options", "speed_rad_s", "accel_rad_s2"),
+    [("", 1.05, 1.4), ("?max_joint_speed_deg_s=120&max_joint_accel_deg_s2=240", 2.094, 4.189)],
+)
+def test_joint_moves_keep_to_the_uri_s_joint_speed_and_acceleration(
+    request: pytest.FixtureRequest,
+    monkeypatch: pytest.MonkeyPatch,
+    options: str,
+    speed_rad_s: float,
+    accel_rad_s2: float,
+) -> None:
+    """moveJ at most at ``max_joint_speed_deg_s`` (default ur_rtde's 1.05 rad/s), with
+    ``max_joint_accel_deg_s2`` (1.4 rad/s^2), however short the move is asked to be."""
+    sent: list[tuple[Any, ...]] = []
+
+    class Recording(CheckedControl):
+        def getInverseKinematics(self, pose: Any, qnear: Any, *args: Any) -> list[float]:
+            return [qnear[0] + 1.0, *qnear[1:]]  # the leading joint 1 rad away
+
+        def moveJ(self, *args: Any) -> bool:
+            sent.append(args)
+            return True
+
+    monkeypatch.setattr(rtde_control, "RTDEControlInterface", Recording)
+    host = loopback_address(request.node.name)
+    with (
+        running("fake_ur", host, _scenario().to_json()),
+        open_robot(f"ur://{host}{options}") as robot,
+    ):
+        here = robot.pose()
+        robot.move_pose_joints(here.p_base_tcp, here.R_base_tcp, 0.01)
+    ((_q, speed, accel, asynchronous),) = sent
+    assert speed == pytest.approx(speed_rad_s, abs=1e-3) and accel == pytest.approx(
+        accel_rad_s2, abs=1e-3
+    )
+    assert not asynchronous
+
+
 @pytest.mark.parametrize("command", ["speedl", "servol"])
 def test_a_refused_motion_command_is_a_fault(
     request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch, command: str
@@ -340,6 +378,8 @@ def controllers() -> Iterator[dict[str, str]]:
         ("ur://{good}:30003", None, "ur:// takes a host only"),
         ("ur://{good}?speed=1", None, "unknown option 'speed' for ur://"),
         ("ur://{good}?max_speed_mm_s=5000", None, "above 1000 mm/s"),
+        ("ur://{good}?max_joint_speed_deg_s=400", None, "max_joint_speed_deg_s above 180"),
+        ("ur://{good}?max_joint_accel_deg_s2=-1", None, "max_joint_accel_deg_s2"),
         ("ur://", None, "give the controller's address"),
         ("ur://{good}", "ur://{nobody}", "must be on the robot's controller"),
         ("ur://{good}", "ur://{good}?wrench=joint", "expected one of raw, tcp"),

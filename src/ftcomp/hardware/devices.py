@@ -210,7 +210,10 @@ BUILT_IN: Final[tuple[Device, ...]] = (
             ),
             arm="ftcomp.sim.arm:ur5e_arm",
             requires=("rtde_control", "rtde_receive"),
-            record_options="max_speed_mm_s=250&max_accel_mm_s2=1500",
+            record_options=(
+                "max_speed_mm_s=250&max_accel_mm_s2=1500"
+                "&max_joint_speed_deg_s=120&max_joint_accel_deg_s2=240"
+            ),
         ),
     ),
     Device(

@@ -6,6 +6,8 @@ URI::
         ?frequency_hz=500         RTDE and control rate (default: 500 on e-Series, 125 on CB3)
         &max_speed_mm_s=100       speed limit of blocking moves (moveL) [mm/s]
         &max_accel_mm_s2=500      their acceleration [mm/s^2], and speedL's
+        &max_joint_speed_deg_s=60 speed limit of joint moves (moveJ), leading joint [deg/s]
+        &max_joint_accel_deg_s2=80  their acceleration [deg/s^2]
         &command=speedl|servol    how a twist is sent: speedL, or servoL to the integrated pose
         &timeout_s=0.5            the controller's data older than this is a lost connection [s]
         &connect_timeout_s=2      longest wait for the controller to answer [s]
@@ -90,10 +92,14 @@ _MOVEL_RAD_PER_M = 4.0
 #: at the target; further, and the arm did not get there (a joint limit, a singularity).
 _ARRIVED_M = 1e-3
 _ARRIVED_RAD = math.radians(0.5)
-#: Joint moves (moveJ) at most this fast and with this acceleration, leading joint [rad/s,
-#: rad/s^2]: ur_rtde's and PolyScope's defaults for moveJ.
+#: Joint moves (moveJ) at most this fast and with this acceleration by default, leading joint
+#: [rad/s, rad/s^2]: ur_rtde's and PolyScope's defaults for moveJ (the URI's
+#: ``max_joint_speed_deg_s`` and ``max_joint_accel_deg_s2``, up to the limits below: a UR5e's
+#: joints turn at most 180 deg/s).
 _JOINT_SPEED_RAD_S: Final = 1.05
 _JOINT_ACCEL_RAD_S2: Final = 1.4
+_MAX_JOINT_SPEED_DEG_S: Final = 180.0
+_MAX_JOINT_ACCEL_DEG_S2: Final = 1000.0
 
 
 #: RTDE ``safety_status_bits``: protective stopped (bit 2), emergency stopped (bit 7), as
@@ -118,6 +124,8 @@ class URRobot(LatenessOfPacer):
         frequency_hz: RTDE rate and control rate [Hz]; None: by controller generation.
         max_speed_m_s: speed limit of blocking moves [m/s].
         max_accel_m_s2: their acceleration, and speedL's [m/s^2].
+        max_joint_speed_rad_s: speed limit of joint moves, leading joint [rad/s].
+        max_joint_accel_rad_s2: their acceleration [rad/s^2].
         command: ``"speedl"`` or ``"servol"``.
         timeout_s: controller data older than this is a lost connection [s].
         connect_timeout_s: the connection check's time limit [s].
@@ -133,6 +141,8 @@ class URRobot(LatenessOfPacer):
         frequency_hz: float | None,
         max_speed_m_s: float,
         max_accel_m_s2: float,
+        max_joint_speed_rad_s: float = _JOINT_SPEED_RAD_S,
+        max_joint_accel_rad_s2: float = _JOINT_ACCEL_RAD_S2,
         command: str,
         timeout_s: float,
         connect_timeout_s: float,
@@ -141,6 +151,8 @@ class URRobot(LatenessOfPacer):
         self.host = uri.host
         self.max_speed_m_s = max_speed_m_s
         self.max_accel_m_s2 = max_accel_m_s2
+        self.max_joint_speed_rad_s = max_joint_speed_rad_s
+        self.max_joint_accel_rad_s2 = max_joint_accel_rad_s2
         self.command = command
         self.timeout_s = timeout_s
         self.connect_timeout_s = connect_timeout_s
@@ -354,7 +366,8 @@ class URRobot(LatenessOfPacer):
         self, p_base_tcp: NDArray[np.float64], R_base_tcp: NDArray[np.float64], duration_s: float
     ) -> None:
         """Blocking joint move (moveJ) to the inverse kinematics nearest the current joints,
-        the leading joint at a speed that takes about ``duration_s`` (at most 1.05 rad/s).
+        the leading joint at a speed that takes about ``duration_s`` (at most
+        ``max_joint_speed_rad_s``).
 
         Raises:
             UnreachablePoseError: no inverse kinematics or outside the safety limits (checked
@@ -372,9 +385,9 @@ class URRobot(LatenessOfPacer):
                 "(no inverse kinematics or outside the safety limits); not moved"
             )
         way = float(np.max(np.abs(q - q_now)))
-        speed = min(_JOINT_SPEED_RAD_S, max(way / max(duration_s, 1e-3), 1e-3))
+        speed = min(self.max_joint_speed_rad_s, max(way / max(duration_s, 1e-3), 1e-3))
         self._moving = True
-        ok = self._control().moveJ(q.tolist(), speed, _JOINT_ACCEL_RAD_S2, False)
+        ok = self._control().moveJ(q.tolist(), speed, self.max_joint_accel_rad_s2, False)
         self._moving = False
         self._check_arrival(ok, "moveJ", p, R)
 
@@ -682,6 +695,8 @@ def open_robot(uri: Uri) -> Robot:
     frequency = options.number("frequency_hz", None)
     speed = options.positive("max_speed_mm_s", 100.0)
     accel = options.positive("max_accel_mm_s2", 500.0)
+    joint_speed = options.positive("max_joint_speed_deg_s", math.degrees(_JOINT_SPEED_RAD_S))
+    joint_accel = options.positive("max_joint_accel_deg_s2", math.degrees(_JOINT_ACCEL_RAD_S2))
     command = options.text("command", "speedl", ("speedl", "servol"))
     timeout_s = options.positive("timeout_s", 0.5)
     connect_s = options.positive("connect_timeout_s", 2.0)
@@ -690,11 +705,19 @@ def open_robot(uri: Uri) -> Robot:
         raise ParameterError(f"{uri.text!r}: frequency_hz must be in [1, 500], got {frequency:g}")
     if speed > 1000.0:
         raise ParameterError(f"{uri.text!r}: max_speed_mm_s above 1000 mm/s is not allowed")
+    for name, value, limit in (
+        ("max_joint_speed_deg_s", joint_speed, _MAX_JOINT_SPEED_DEG_S),
+        ("max_joint_accel_deg_s2", joint_accel, _MAX_JOINT_ACCEL_DEG_S2),
+    ):
+        if value > limit:
+            raise ParameterError(f"{uri.text!r}: {name} above {limit:g} is not allowed")
     return URRobot(
         uri,
         frequency_hz=frequency,
         max_speed_m_s=speed * 1e-3,
         max_accel_m_s2=accel * 1e-3,
+        max_joint_speed_rad_s=math.radians(joint_speed),
+        max_joint_accel_rad_s2=math.radians(joint_accel),
         command=command,
         timeout_s=timeout_s,
         connect_timeout_s=connect_s,
