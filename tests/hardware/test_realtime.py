@@ -39,6 +39,7 @@ def test_a_refused_real_time_priority_is_said_once_with_how_to_allow_it(
     assert "rtprio" in lines[0]
 
 
+@pytest.mark.live  # a real-time loop in this process: under -n, at the normal policy (conftest)
 def test_the_loop_and_python_threads_are_real_time_and_native_threads_keep_their_own() -> None:
     """The loop's thread at its priority, another Python thread (a reader, the log's worker)
     at WORKER_PRIORITY, and a native thread (numpy's OpenBLAS worker, which spins between
