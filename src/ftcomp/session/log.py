@@ -21,12 +21,14 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import io
+import os
 import queue
 import sys
 import threading
 from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Protocol, runtime_checkable
+from typing import BinaryIO, Protocol, runtime_checkable
 
 from ftcomp.errors import ParameterError
 from ftcomp.hardware.pacing import TimingSummary
@@ -155,22 +157,36 @@ class ObserverThread:
 class CsvLog:
     """Writes rows of ``columns`` (see :func:`csv_log`); ``rows`` counts them.
 
+    A row is formatted, counted and kept in memory with no call between the count and the
+    keeping, so a Ctrl-C (Python raises it only at a call or a loop's jump) lands before both or
+    after both; kept bytes go to the file by unbuffered writes, each resynchronised from the
+    file's offset, so a Ctrl-C inside one (or just after it returned) loses and repeats nothing.
+    Python's buffered text file raised it from inside a row's write while handing a full buffer
+    on, and dropped that row after it was counted (a stream stopped by Ctrl-C, 234 rows in a log
+    that said 235).
+
     Args:
-        handle: the open text file.
+        handle: the file, open for unbuffered binary writing (``open(path, "wb", buffering=0)``).
         columns: the header.
         digits: significant digits of the numbers after the first column.
-        observer: also sees every row (after it is written).
+        observer: also sees every row (after it is kept).
     """
+
+    #: Kept bytes are handed to the file once this many are waiting (and when the log ends).
+    WRITE_BYTES = 1 << 16
 
     def __init__(
         self,
-        handle: object,
+        handle: BinaryIO,
         columns: Sequence[str],
         digits: int,
         observer: LogObserver | None = None,
     ) -> None:
-        self._writer = csv.writer(handle, lineterminator="\n")  # type: ignore[arg-type]
-        self._writer.writerow(columns)
+        header = io.StringIO()
+        csv.writer(header, lineterminator="\n").writerow(columns)
+        self._fd = handle.fileno()
+        self._written = os.lseek(self._fd, 0, os.SEEK_CUR)
+        self._kept = bytearray(header.getvalue().encode())
         self._format = f"{{:.{digits}g}}".format
         self.columns = tuple(columns)
         self.rows = 0
@@ -181,14 +197,26 @@ class CsvLog:
         """One row: its first value a time stamp [s], the others numbers; ``t_ns``: the row's
         exact stamp [ns] for the observer (default: the first value in nanoseconds)."""
         fmt = self._format
-        line = [format_time(row[0]), *(fmt(v) for v in row[1:])]
-        # Counted, then written, with no call between: a Ctrl-C (Python raises it only at a
-        # call or a loop's jump) lands before both or after both, so ``rows`` is the rows in
-        # the file (flush relies on it).
+        line = ",".join([format_time(row[0]), *(fmt(v) for v in row[1:])]) + "\n"
+        data = line.encode()
+        # Counted, then kept, with no call between (the class docstring).
         self.rows += 1
-        self._writer.writerow(line)
+        self._kept += data
         if self.observer is not None:
             self.observer.row(round(row[0] * 1e9) if t_ns is None else t_ns, row)
+        if len(self._kept) >= self.WRITE_BYTES:
+            self.write_kept()
+
+    def write_kept(self) -> None:
+        """Hand every kept byte to the file (the class docstring)."""
+        while True:
+            # what the file took of the kept bytes, a write cut short by Ctrl-C included
+            took = os.lseek(self._fd, 0, os.SEEK_CUR) - self._written
+            del self._kept[:took]
+            self._written += took
+            if not self._kept:
+                return
+            os.write(self._fd, self._kept)
 
     def write_later(self, row: Sequence[float], t_ns: int | None = None) -> None:
         """Keep a row (as :meth:`write` takes it) for the next :meth:`flush`: a control loop
@@ -198,7 +226,7 @@ class CsvLog:
 
     def flush(self) -> None:
         """Write the rows kept by :meth:`write_later`, in order. A row leaves the list once it
-        is in the file (:attr:`rows` counts it), so a flush cut short (Ctrl-C lands anywhere
+        is kept for the file (:attr:`rows` counts it), so a flush cut short (Ctrl-C lands anywhere
         in the loop, its slack too) leaves the rest, the interrupted row included, for the
         next one: no row written twice, none lost."""
         later = self._later
@@ -266,7 +294,7 @@ def csv_log(
     :class:`ObserverThread` (opened here, closed when the block ends)."""
     thread = ObserverThread(observers) if observers else None
     try:
-        with atomic_output(path) as tmp, tmp.open("w", encoding="utf-8", newline="") as handle:
+        with atomic_output(path) as tmp, tmp.open("wb", buffering=0) as handle:
             if thread is not None:
                 thread.open(columns)
             log = CsvLog(handle, columns, digits, thread)
@@ -274,6 +302,7 @@ def csv_log(
                 yield log
             finally:
                 log.flush()
+                log.write_kept()
     finally:
         if thread is not None:
             thread.close()
