@@ -175,13 +175,17 @@ HOST_STOPS = ("protective stop: stale_sample", "loop late:")
 #: Runs of a placement or a fault on a fresh twin before a host stop fails the test. The twin,
 #: hardware's stand-in, shares the test host's two cores with ``run``, both at real-time
 #: priority: a stop for the host says nothing of the face, so the run is repeated once on a
-#: fresh twin, with a warning that quotes its timing line; a second host stop fails. Serial
+#: fresh twin, with a warning that quotes its timing line; a third host stop fails. Serial
 #: faces stopped so in up to two of a clean CI run's seven serial runs (a Bota Gen0 stream
 #: 77 ms silent) until ``run`` stopped raising its client libraries' native threads to its
 #: priority (hardware/pacing.py: ur_rtde's and OpenBLAS's spinning threads held a core, and the
 #: kernel's worker that hands a pty's bytes on waited behind them; ``python
 #: bench/bench_serial_delivery.py`` shows that wait).
-HOST_ATTEMPTS = 2
+#: The third run: a clean clone's CI lost both FR3 placements to two host stops each while the
+#: virtual machine's host took 10 % of its CPU time (``steal`` in ``/proc/stat``; 23 % in a
+#: quiet 10 s here): the FR3 twin's 1 kHz cycle, about 0.7-0.9 ms of Python on this machine,
+#: has no margin for it.
+HOST_ATTEMPTS = 3
 #: What the twin says once it injected its fault.
 INJECTED = "injected the fault"
 
@@ -194,9 +198,9 @@ def _repeat_after_host_stop(
     name: str, attempt: Any, folder: Path, *, expected: str | None = None
 ) -> Any:
     """``attempt(folder / "runN")`` (one run on a fresh twin, its files in a new folder: its
-    ``run`` result first, what the twin said last), again once when ``run`` stopped for its
-    host, unless the stop is ``expected`` (a fault's declared stop, after the twin injected
-    it), with a :class:`HostStopWarning`; the last result."""
+    ``run`` result first, what the twin said last), again while ``run`` stopped for its host
+    (:data:`HOST_ATTEMPTS` runs in all), unless the stop is ``expected`` (a fault's declared
+    stop, after the twin injected it), with a :class:`HostStopWarning`; the last result."""
     for number in range(1, HOST_ATTEMPTS + 1):
         run_folder = folder / f"run{number}"
         run_folder.mkdir()
