@@ -84,20 +84,22 @@ def ur_inverse_kinematics(
         return []
     psi = math.atan2(wrist[1], wrist[0])
     lean = math.asin(max(-1.0, min(1.0, d4 / r)))
+    T06 = _pose(p, R)
     solutions: list[NDArray[np.float64]] = []
     for q1 in (psi + lean, psi + math.pi - lean):
         s1, c1 = math.sin(q1), math.cos(q1)
         # R_16's third row is R_06's columns dotted with frame 1's z axis (s1, -c1, 0); its
         # angle (not acos of its last entry, which loses half the digits near the singularity)
         row = R[0, :] * s1 - R[1, :] * c1
-        base5 = math.atan2(math.hypot(row[0], row[1]), row[2])
+        s5 = math.hypot(row[0], row[1])  # |sin q5|
+        base5 = math.atan2(s5, row[2])
+        T16 = np.linalg.inv(arm.row_transform(0, q1)) @ T06
         for side in (1.0, -1.0):
             q5 = side * base5
-            singular = math.hypot(row[0], row[1]) < _SINGULAR
+            singular = s5 < _SINGULAR
             q6 = q6_if_singular if singular else math.atan2(-side * row[1], side * row[0])
             T14 = (
-                np.linalg.inv(arm.row_transform(0, q1))
-                @ _pose(p, R)
+                T16
                 @ np.linalg.inv(arm.row_transform(5, q6))
                 @ np.linalg.inv(arm.row_transform(4, q5))
             )
