@@ -72,17 +72,17 @@ def identified_tool() -> GravityModel:
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """How pytest-xdist's workers (``-n``, ``--dist loadgroup``) share the tests.
 
-    - The ``live`` modules (a twin, a client's real-time loop, a ROS 2 graph) run one test at
-      a time, all on one worker: two at once on the two cores starved each other's streams
-      (a Net F/T twin silent past pynetft's 100 ms time-out).
+    - The ``live`` tests that judge timing (a twin, a client's real-time loop, a ROS 2 graph)
+      run one at a time, all on one worker: two at once on the two cores starved each other's
+      streams (a Net F/T twin silent past pynetft's 100 ms time-out).
     - The tests that share a module-scoped fixture go to one worker, so that it is set up
       once, not once per worker that draws one of them.
-    - Every other test goes to whichever worker is free.
+    - Every other test, an ``untimed`` live one included, goes to whichever worker is free.
     """
     if not getattr(config.option, "loadgroup", False):
         return
     for item in items:
-        if item.get_closest_marker("live") is not None:
+        if _timed_live(item):
             item.add_marker(pytest.mark.xdist_group("live"))
             continue
         # The fixtures' scopes are known only from pytest's own (private) fixture info.
@@ -107,7 +107,8 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 @pytest.hookimpl(tryfirst=True)  # before any fixture of the test: its processes inherit it
 def pytest_runtest_setup(item: pytest.Item) -> None:
     """Under ``-n 2 --dist loadgroup``, a test that is not ``live`` runs at nice 19, a live one
-    at nice 0 (its twin and client raise their own loops to real-time priority).
+    at nice 0 (a timed one's twin and client raise their own loops to real-time priority; an
+    ``untimed`` one's twin at normal priority: ``running_twin(..., realtime=False)``).
 
     The live tests keep real time and use about one of the two cores (twin and client: 1077 s
     of CPU over a 1213 s run in one process, the rest of the tests included); at nice 0 the
@@ -123,6 +124,12 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
     live = item.get_closest_marker("live") is not None
     with contextlib.suppress(PermissionError):
         os.setpriority(os.PRIO_PROCESS, 0, 0 if live else 19)
+
+
+def _timed_live(item: pytest.Item) -> bool:
+    """A live test whose checks judge timing: not marked ``untimed``."""
+    live, untimed = (item.get_closest_marker(name) for name in ("live", "untimed"))
+    return live is not None and untimed is None
 
 
 @pytest.hookimpl(trylast=True)

@@ -36,7 +36,9 @@ KEYS = ("tool_weight_N", "center_of_gravity_m", "force_bias_N", "torque_bias_Nm"
 Z_MAX = 4.06
 
 
-pytestmark = pytest.mark.live
+#: Untimed: a session at its defaults, judged by its poses and its calibration
+#: (no stop, rate or lateness).
+pytestmark = [pytest.mark.live, pytest.mark.untimed]
 
 
 def random_start(rng: np.random.Generator) -> tuple[list[float], tuple[float, float]]:
@@ -80,6 +82,7 @@ def test_the_first_session_at_its_defaults_completes_from_a_random_start(
         str(truth),
         seconds=400.0,
         ready_timeout_s=120.0,  # the start move (up to 2.5 s of arm time) on a busy host
+        realtime=False,
     ) as twin:
         design = _ftcomp(
             "poses", "design", "--count", "9", "--robot", twin.robot_uri, "-o", str(poses)

@@ -30,7 +30,8 @@ OFFSET_M = np.array([0.0, 0.0, 0.025])
 ROTVEC = np.array([0.0, 0.0, 0.5])
 
 
-pytestmark = pytest.mark.live
+#: Untimed: the controller's answers and a stream's values (no stop, rate or lateness).
+pytestmark = [pytest.mark.live, pytest.mark.untimed]
 
 
 def _at_rest(receive: object, timeout_s: float = 5.0) -> None:
@@ -63,6 +64,7 @@ def test_payload_set_writes_the_calibration_and_actual_TCP_force_then_reads_no_c
         "--tcp-offset-mm=0,0,25",
         "--tcp-rotvec-rad=0,0,0.5",
         seconds=90.0,
+        realtime=False,
     ) as twin:
         calibration_from_truth(truth, cal)
         assert main(["payload", "set", twin.robot_uri, "-c", str(cal)]) == 0
