@@ -107,8 +107,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 @pytest.hookimpl(tryfirst=True)  # before any fixture of the test: its processes inherit it
 def pytest_runtest_setup(item: pytest.Item) -> None:
     """Under ``-n 2 --dist loadgroup``, a test that is not ``live`` runs at nice 19, a live one
-    at nice 0 (a timed one's twin and client raise their own loops to real-time priority; an
-    ``untimed`` one's twin at normal priority: ``running_twin(..., realtime=False)``).
+    at nice 0 (its twin and client raise their own loops to real-time priority).
 
     The live tests keep real time and use about one of the two cores (twin and client: 1077 s
     of CPU over a 1213 s run in one process, the rest of the tests included); at nice 0 the

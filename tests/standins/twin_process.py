@@ -48,12 +48,9 @@ def running_twin(
     seconds: float = 60.0,
     ready_timeout_s: float = 30.0,
     env: dict[str, str] | None = None,
-    realtime: bool = True,
 ) -> Iterator[Twin]:
     """``ftcomp twin`` with ``args`` on two addresses derived from ``name`` (in ``env``, by
-    default this process's environment); without ``realtime``, at normal priority (an
-    ``untimed`` test's: under ``-n 2`` it runs beside a timed one, whose loops it must not
-    take a core from)."""
+    default this process's environment)."""
     robot_host = loopback_address(name, 1)
     sensor_host = loopback_address(name, 2)
     command = [
@@ -67,7 +64,6 @@ def running_twin(
         sensor_host,
         "--seconds",
         str(seconds),
-        *(() if realtime else ("--no-realtime",)),
         *args,
     ]
     proc = subprocess.Popen(

@@ -69,7 +69,6 @@ def test_tracking_holds_a_twin_calibration_at_the_floor_while_the_bias_warms_up(
         "2",
         "--tilt-deg=-0.204,-0.129",
         seconds=600.0,
-        realtime=False,
     ) as twin:
         robot = f"{twin.robot_uri}?max_speed_mm_s=250&max_accel_mm_s2=1500"
         done = _ftcomp(

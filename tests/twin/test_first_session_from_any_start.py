@@ -82,7 +82,6 @@ def test_the_first_session_at_its_defaults_completes_from_a_random_start(
         str(truth),
         seconds=400.0,
         ready_timeout_s=120.0,  # the start move (up to 2.5 s of arm time) on a busy host
-        realtime=False,
     ) as twin:
         design = _ftcomp(
             "poses", "design", "--count", "9", "--robot", twin.robot_uri, "-o", str(poses)

@@ -64,7 +64,6 @@ def test_payload_set_writes_the_calibration_and_actual_TCP_force_then_reads_no_c
         "--tcp-offset-mm=0,0,25",
         "--tcp-rotvec-rad=0,0,0.5",
         seconds=90.0,
-        realtime=False,
     ) as twin:
         calibration_from_truth(truth, cal)
         assert main(["payload", "set", twin.robot_uri, "-c", str(cal)]) == 0
