@@ -145,6 +145,14 @@ def test_the_threshold_rises_with_few_poses_and_is_8_from_6_poses() -> None:
     assert outlier_threshold(3) == np.inf
     assert outlier_threshold(4) > outlier_threshold(5) > OUTLIER_THRESHOLD
     assert outlier_threshold(6) == outlier_threshold(1000) == OUTLIER_THRESHOLD
+    # Student's t's quantile, Bonferroni over 6 axes x 2 tails x the poses: scipy.stats's.
+    from scipy.stats import t
+
+    from ftcomp.calibration.outliers import _FALSE_ALARM
+
+    for poses in (4, 5):
+        expected = t.isf(_FALSE_ALARM / (2 * 6 * poses), 3 * poses - 9)
+        assert outlier_threshold(poses) == pytest.approx(expected, rel=1e-12)
 
 
 def test_four_poses_still_name_a_corrupt_reading(tmp_path) -> None:
