@@ -193,7 +193,7 @@ class UrFace:
         self.cell.command_twist(self.controller.cycle(contact_force_N))
 
     def publish(self, wrench_sensor: NDArray[np.float64]) -> None:
-        if self.silent:
+        if self.silent or not self._listened_to():
             return
         state = self._state(wrench_sensor)
         registers = {**self.controller.inputs, **self.controller.registers}
@@ -208,6 +208,18 @@ class UrFace:
         while self.delayed and self.delayed[0][0] <= now:
             _, late_state, late_registers = self.delayed.popleft()
             self._send(late_state, late_registers)
+
+    def _listened_to(self) -> bool:
+        """Whether a period's state goes anywhere: a started RTDE session, a package the
+        latency fault holds back, or a zero_ftsensor averaging the next packages. Building it
+        took a fifth of an idle twin's cycle (0.16 of 0.77 ms, 2-core host)."""
+        ctl = self.controller
+        return (
+            any(session.started for session in self.sessions)
+            or bool(self.delayed)
+            or ctl.zero_ft_requested
+            or self.zeroing is not None
+        )
 
     def inject(self, fault: str) -> None:
         if fault in ("rtde-stop", "network-loss"):
