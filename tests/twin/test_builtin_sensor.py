@@ -67,9 +67,10 @@ def test_stream_from_the_builtin_sensor_with_a_tcp_offset_reads_the_net_ft_wrenc
         ur = _stream(twin.robot_uri, builtin, tmp_path / "ur.csv")
     # The built-in sensor is polled once a cycle at the controller's own rate: a poll finds the
     # newest package or nothing new, so a 1 s stream logs part of its 500 (342-498 in three
-    # streams on a quiet host, 220 in one clean-clone run of the suite). The comparison below
-    # takes its standard errors from what came.
-    assert len(netft) > 500 and len(ur) > 100
+    # streams on a quiet host, 220 and 94 in two runs of the whole suite: two 500 Hz clocks,
+    # the poll's and the controller's, in step with one another now and then). The comparison
+    # below takes its standard errors from what came (from 50 readings one is known to 10 %).
+    assert len(netft) > 500 and len(ur) > 50
     # the model's noise: each mean's standard error (the Net F/T's counts add 1/2 count)
     se = np.sqrt(netft.var(axis=0) / len(netft) + ur.var(axis=0) / len(ur))
     difference = ur.mean(axis=0) - netft.mean(axis=0)
