@@ -191,7 +191,8 @@ INJECTED = "injected the fault"
 
 
 class HostStopWarning(UserWarning):
-    """A conformance run stopped for its host (:data:`HOST_STOPS`) and was run again."""
+    """A conformance run stopped for its host (:data:`HOST_STOPS`), or went on held off by it
+    (:func:`_held_off`), and was run again."""
 
 
 #: A run's timing line: the oldest reading its loop used [ms].

@@ -64,11 +64,7 @@ def test_tracking_holds_a_twin_calibration_at_the_floor_while_the_bias_warms_up(
 ) -> None:
     samples, calibration, log = tmp_path / "s.csv", tmp_path / "cal.json", tmp_path / "log.csv"
     with running_twin(
-        "twin_bias_tracking",
-        "--realistic-drift",
-        "2",
-        "--tilt-deg=-0.204,-0.129",
-        seconds=600.0,
+        "twin_bias_tracking", "--realistic-drift", "2", "--tilt-deg=-0.204,-0.129", seconds=600.0
     ) as twin:
         robot = f"{twin.robot_uri}?max_speed_mm_s=250&max_accel_mm_s2=1500"
         done = _ftcomp(

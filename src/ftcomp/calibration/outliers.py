@@ -213,7 +213,7 @@ def outlier_threshold(poses: int) -> float:
     if dof < _MIN_DOF:
         return math.inf
     # Student's t's quantile from scipy.special (what scipy.stats.t.isf computes, to the last
-    # bit): importing scipy.stats took a second of every ``calibrate`` (3.7 s in all, 2-core).
+    # bit): importing scipy.stats took a second of every ``calibrate`` (2.2 s in all, 2-core).
     from scipy.special import stdtrit
 
     bound = -float(stdtrit(dof, _FALSE_ALARM / (2 * 6 * poses)))
