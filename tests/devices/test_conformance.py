@@ -172,10 +172,10 @@ def _rows(path: Path) -> tuple[list[str], list[list[str]]]:
 #: than the stale limit (``protective stop: stale_sample``), or its loop too far behind the
 #: robot's schedule (``loop late: ...``).
 HOST_STOPS = ("protective stop: stale_sample", "loop late:")
-#: Runs of a placement or a fault on a fresh twin before a host stop fails the test. The twin,
+#: Runs of a placement or a fault on a fresh twin before the face goes unjudged. The twin,
 #: hardware's stand-in, shares the test host's two cores with ``run``, both at real-time
 #: priority: a stop for the host says nothing of the face, so the run is repeated once on a
-#: fresh twin, with a warning that quotes its timing line; a third host stop fails. Serial
+#: fresh twin, with a warning that quotes its timing line. Serial
 #: faces stopped so in up to two of a clean CI run's seven serial runs (a Bota Gen0 stream
 #: 77 ms silent) until ``run`` stopped raising its client libraries' native threads to its
 #: priority (hardware/pacing.py: ur_rtde's and OpenBLAS's spinning threads held a core, and the
@@ -185,6 +185,12 @@ HOST_STOPS = ("protective stop: stale_sample", "loop late:")
 #: virtual machine's host took 10 % of its CPU time (``steal`` in ``/proc/stat``; 23 % in a
 #: quiet 10 s here): the FR3 twin's 1 kHz cycle, about 0.7-0.9 ms of Python on this machine,
 #: has no margin for it.
+#: After a third, the face is not judged (the test is skipped with the three timing lines),
+#: unless the loop's own CPU time overran its period: the clean clone's CI lost the UR's
+#: sponge placement to three host stops (the twin itself missed 21 % of its periods, its loop
+#: 0.84 ms of CPU per 2 ms cycle at the median), and judged the book's last run, which
+#: pressed 13 N: a force loop whose time constant on the book is 71 ms rings on readings as
+#: old as the host made them (up to 45 ms in the two held-off book runs of an earlier run).
 HOST_ATTEMPTS = 3
 #: What the twin says once it injected its fault.
 INJECTED = "injected the fault"
@@ -197,6 +203,8 @@ class HostStopWarning(UserWarning):
 
 #: A run's timing line: the oldest reading its loop used [ms].
 AGE_MAX = re.compile(r"sensor age p50 \S+ p99 \S+ max (\S+) ms")
+#: A run's timing line: its period and its loop's CPU time per cycle, 99th percentile [ms].
+OWN_CPU = re.compile(r"cycles at (\S+) ms .*\(cpu p50 \S+ p99 (\S+)\)")
 
 
 def _held_off(done: subprocess.CompletedProcess[str], max_age_ms: float | None) -> str | None:
@@ -206,6 +214,18 @@ def _held_off(done: subprocess.CompletedProcess[str], max_age_ms: float | None) 
     if max_age_ms is None or found is None or found[1] == "n/a" or float(found[1]) <= max_age_ms:
         return None
     return f"a reading {found[1]} ms old in its loop"
+
+
+def _overran(done: subprocess.CompletedProcess[str]) -> str | None:
+    """Whether the loop's own computing overran its period: the 99th percentile of its CPU
+    time per cycle (which a host holding the process off does not add: on CI's host, 1.40 ms
+    of CPU against 7.71 ms of wall time per cycle) beyond the period. A stop then is the
+    code's, not the host's. A run with no timing line (it stopped before its loop) overran
+    nothing."""
+    found = OWN_CPU.search(done.stdout)
+    if found is None or float(found[2]) <= float(found[1]):
+        return None
+    return f"its loop's own computing took up to {found[2]} ms of a {found[1]} ms period"
 
 
 def _repeat_after_host_stop(
@@ -220,7 +240,12 @@ def _repeat_after_host_stop(
     ``run`` result first, what the twin said last), again while ``run`` stopped for its host
     (:data:`HOST_ATTEMPTS` runs in all), unless the stop is ``expected`` (a fault's declared
     stop, after the twin injected it), or, given ``max_age_ms``, went on with a reading older
-    than that (:func:`_held_off`), with a :class:`HostStopWarning`; the last result."""
+    than that (:func:`_held_off`), with a :class:`HostStopWarning`; the last result.
+
+    A run whose loop's own computing overran its period (:func:`_overran`) is the code's and is
+    judged whatever stopped it. When the host held off every run, the face is not judged: the
+    test is skipped with each run's reason and timing line."""
+    stops = []
     for number in range(1, HOST_ATTEMPTS + 1):
         run_folder = folder / f"run{number}"
         run_folder.mkdir()
@@ -230,15 +255,49 @@ def _repeat_after_host_stop(
             done, max_age_ms
         )
         own = expected is not None and expected in done.stderr and INJECTED in twin_said
-        if stop is None or own:
+        if stop is None or own or _overran(done):
             return result
+        timing = next((line for line in done.stdout.splitlines() if "timing:" in line), "")
+        stops.append(f"run {number}: {stop}; {timing.strip()}")
         if number < HOST_ATTEMPTS:
-            timing = next((line for line in done.stdout.splitlines() if "timing:" in line), "")
             warnings.warn(
                 HostStopWarning(f"{name}: run {number} stopped for its host ({stop}); {timing}"),
                 stacklevel=2,
             )
-    return result
+    pytest.skip(
+        f"{name}: the host held off all {HOST_ATTEMPTS} runs, the face was not judged: "
+        + " | ".join(stops)
+    )
+
+
+def _stopped(cpu_p99_ms: float, stderr: str = "error: loop late: 50 periods behind") -> Any:
+    """A made-up run's result and twin's word: stopped as ``stderr`` says, its loop's CPU time
+    per 2 ms cycle up to ``cpu_p99_ms``."""
+    timing = (
+        "timing: 900 cycles at 2 ms (real-time), 200 missed periods (22.00%), start late p99 9.00"
+        " max 20.00 ms; compute p50 0.47 p99 7.71 max 20.70 ms"
+        f" (cpu p50 0.47 p99 {cpu_p99_ms:.2f}); sensor age p50 5.00 p99 30.00 max 60.00 ms"
+    )
+    return subprocess.CompletedProcess([], 1, stdout=timing + "\n", stderr=stderr), ""
+
+
+def test_the_host_rule_repeats_held_off_runs_and_judges_a_loop_that_overran(
+    tmp_path: Path,
+) -> None:
+    def attempts(*results: Any) -> Any:
+        given = iter(results)
+        return lambda folder: next(given)
+
+    for folder in "abc":
+        (tmp_path / folder).mkdir()
+    held, fine = _stopped(1.40), (subprocess.CompletedProcess([], 0, stdout="", stderr=""), "")
+    with pytest.warns(HostStopWarning):
+        got = _repeat_after_host_stop("t", attempts(held, held, fine), tmp_path / "a")
+    assert got is fine
+    with pytest.warns(HostStopWarning), pytest.raises(pytest.skip.Exception, match="run 3: loop"):
+        _repeat_after_host_stop("t", attempts(held, held, held), tmp_path / "b")
+    overran = _stopped(2.30)  # its own computing past the 2 ms period: the code's, judged
+    assert _repeat_after_host_stop("t", attempts(overran), tmp_path / "c") is overran
 
 
 @pytest.fixture(scope="module", params=_pairs())
