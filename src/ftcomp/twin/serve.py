@@ -210,9 +210,10 @@ class TwinResult:
         contact: with a load and a surface, what the surface carried (the truth a client's
             placement is judged by: ``the surface carries 4.901 N of the load's 4.903 N at
             the end, at most 4.950 N``); empty otherwise.
-        fault: with a fault, whether it came (``injected the fault bota-overrange 0.5 s after a
-            client first commanded the arm``, or that it did not: the run ended first); empty
-            otherwise.
+        fault: with a fault, whether it came and when (``injected the fault bota-overrange
+            0.502 s after a client first commanded the arm (asked for 0.5 s)``: later than
+            asked by as much as the period that saw it was late), or that it did not: the run
+            ended first; empty otherwise.
     """
 
     cycles: int
@@ -273,7 +274,9 @@ class _Twin:
         self.sensor = sensor
         self.faults = pair_faults(config.robot, config.sensor)
         self.started_at: float | None = None
-        self.fault_fired = False
+        # When the fault came, after a client first commanded the arm [s]: its asked-for time,
+        # or later by as much as the loop's period that saw it was late.
+        self.fault_fired_after_s: float | None = None
         # The surface's push on the load (its true contact force, >= 0) [N]: largest, last.
         self.contact_peak_N = 0.0
         self.contact_last_N = 0.0
@@ -282,13 +285,13 @@ class _Twin:
         """The fault on its face(s) once ``fault_at_s`` passed since a client first commanded
         the arm."""
         fault = self.config.fault
-        if fault is None or self.fault_fired:
+        if fault is None or self.fault_fired_after_s is not None:
             return
         if self.started_at is None and self.robot.commanded():
             self.started_at = now
         if self.started_at is None or now - self.started_at < self.config.fault_at_s:
             return
-        self.fault_fired = True
+        self.fault_fired_after_s = now - self.started_at
         for face, device in (
             (self.robot, self.config.robot_face()),
             (self.sensor, self.config.sensor_face()),
@@ -332,8 +335,11 @@ class _Twin:
         fault, at_s = self.config.fault, self.config.fault_at_s
         if fault is None:
             return ""
-        if self.fault_fired:
-            return f"injected the fault {fault} {at_s:g} s after a client first commanded the arm"
+        if self.fault_fired_after_s is not None:
+            return (
+                f"injected the fault {fault} {self.fault_fired_after_s:.3f} s after a client "
+                f"first commanded the arm (asked for {at_s:g} s)"
+            )
         return f"did not inject the fault {fault}: the twin ended first"
 
     def _carries_a_load(self) -> bool:
