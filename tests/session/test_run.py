@@ -143,6 +143,16 @@ def test_the_wrench_filter_is_a_twentieth_of_a_slower_sensors_rate(
 ) -> None:
     assert filter_hz_for(None) == 10.0 and filter_hz_for(1000.0) == 10.0
     assert filter_hz_for(100.0) == 5.0  # time constant 32 ms: three of its samples
+    # a law with no K1 on a yielding axis only integrates: the lag alone counts
+    assert filter_hz_for(None, differentiates=False) == 20.0
+    assert filter_hz_for(100.0, differentiates=False) == 20.0
+    assert AdmittanceConfig(_limits()).differentiates_force()
+    assert not AdmittanceConfig(_limits(), k1=(0.0,) * 6).differentiates_force()
+    assert not AdmittanceConfig(_limits(), k1=(1e-4, 0, 0, 0, 0, 0)).differentiates_force()
+    assert AdmittanceConfig(_limits(), k1=(1e-4, 0, 0, 0, 0, 0), axes="x").differentiates_force()
+    assert not AdmittanceConfig(_limits(), law="velocity").differentiates_force()
+    assert AdmittanceConfig(_limits(), law="position").differentiates_force()
+    assert not AdmittanceConfig(_limits(), law="mass-damper-spring").differentiates_force()
     config = RunConfig(AdmittanceConfig(_limits()), duration_s=0.1)
     with ftcomp.open_robot(PLACE) as robot, ftcomp.open_sensor("sim://", robot) as sensor:
         assert run_compliant(robot, sensor, tool, config, tmp_path / "a.csv").filter_hz == 10.0

@@ -44,6 +44,7 @@ from ftcomp.session.interrupts import InterruptHold
 from ftcomp.session.run import (
     FILTER_HZ,
     FILTER_SHARE_OF_RATE,
+    INTEGRAL_FILTER_HZ,
     STALE_SENSOR_PERIODS,
     AdmittanceConfig,
     RunConfig,
@@ -129,7 +130,8 @@ def register(parser: argparse.ArgumentParser) -> None:
         parser,
         AdmittanceConfig,
         "filter_hz",
-        none_means=f"{FILTER_HZ:g}, or a slower sensor's rate / {1 / FILTER_SHARE_OF_RATE:g}",
+        none_means=f"{FILTER_HZ:g}, or a slower sensor's rate / {1 / FILTER_SHARE_OF_RATE:g}; "
+        f"{INTEGRAL_FILTER_HZ:g} with no K1 on an axis that yields",
     )
     for field, flag, scale, unit in (
         ("max_speed_m_s", "--max-speed-mm-s", mm, "mm/s"),

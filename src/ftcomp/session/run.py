@@ -68,6 +68,7 @@ from ftcomp.session.outcome import Outcome
 __all__ = [
     "FILTER_HZ",
     "FILTER_SHARE_OF_RATE",
+    "INTEGRAL_FILTER_HZ",
     "LAWS",
     "RUN_COLUMNS",
     "STALE_SENSOR_PERIODS",
@@ -148,10 +149,20 @@ def cycle_row(record: CycleRecord, t0_ns: int) -> list[float]:
 #: On the book the FR3 twin pressed 1.85 N beyond the weight at 5 Hz (45 ms of lag in a loop
 #: of 71 ms: 1 / (K2 * 1.4e5 N/m) at K2 = 0.1 mm/(s*N)), within 0.3 N at 10 Hz and 20 Hz.
 FILTER_HZ = 10.0
-#: ... and at most this share of the sensor's sample rate: the filter's time constant then
-#: spans three of the sensor's samples (1 / (2 pi rate / 20) = 3.2 sample periods). A sensor
-#: slower than the loop (an FT 300's 100 Hz under a UR's 500 Hz) holds each reading for
-#: several cycles, steps the filter must not pass to K1's derivative.
+#: ... and this with a law that does not differentiate the force (no K1 on an axis that
+#: yields: the velocity and mass-damper-spring laws, the combined law with K1 = 0), where only
+#: the lag counts. A delayed first-order loop rings once its delay passes 1/e of its time
+#: constant: the 10 Hz filter's 22 ms with the twin's 3-4 cycles of round trip is about 0.4 of
+#: the book's 71 ms, so a host's late reading tips it. The UR5e twin's book placement (K1 0,
+#: K2 0.1 mm/(s*N), the true calibration), five runs each: at 10 Hz 0.04-0.55 N beyond the
+#: weight (0.55 N with a reading 27 ms old), at 20 Hz 0.05-0.07 N (one run with readings up to
+#: 39 ms old and 6.5 % missed periods).
+INTEGRAL_FILTER_HZ = 20.0
+#: ... and, with K1's derivative, at most this share of the sensor's sample rate: the filter's
+#: time constant then spans three of the sensor's samples (1 / (2 pi rate / 20) = 3.2 sample
+#: periods). A sensor slower than the loop (an FT 300's 100 Hz under a UR's 500 Hz) holds each
+#: reading for several cycles, steps the filter must not pass to K1's derivative (a law without
+#: one only integrates them).
 FILTER_SHARE_OF_RATE = 1.0 / 20.0
 #: How long ``run`` waits for a sensor to have measured its rate [s].
 RATE_WAIT_S = 1.0
@@ -162,9 +173,13 @@ RATE_WAIT_S = 1.0
 STALE_SENSOR_PERIODS = 4
 
 
-def filter_hz_for(sensor_rate_hz: float | None) -> float:
+def filter_hz_for(sensor_rate_hz: float | None, *, differentiates: bool = True) -> float:
     """The contact wrench's low-pass for a sensor sampling at ``sensor_rate_hz`` [Hz] (None:
-    not known): :data:`FILTER_HZ`, or :data:`FILTER_SHARE_OF_RATE` of a slower sensor's rate."""
+    not known) under a law that ``differentiates`` the force (a K1 term): :data:`FILTER_HZ`,
+    or :data:`FILTER_SHARE_OF_RATE` of a slower sensor's rate; without one
+    :data:`INTEGRAL_FILTER_HZ`."""
+    if not differentiates:
+        return INTEGRAL_FILTER_HZ
     if sensor_rate_hz is None:
         return FILTER_HZ
     return min(FILTER_HZ, FILTER_SHARE_OF_RATE * sensor_rate_hz)
@@ -220,7 +235,7 @@ class AdmittanceConfig:
         stiffness: its K [N/m; N*m/rad], >= 0 (0: free).
         wrench_desired: F0 [N, N*m] in the control frame.
         filter_hz: the low-pass on the contact wrench [Hz], > 0; None: :func:`filter_hz_for`
-            the sensor's sample rate.
+            the sensor's sample rate and the law.
     """
 
     limits: SafetyLimits
@@ -262,6 +277,14 @@ class AdmittanceConfig:
         except ParameterError as exc:
             raise ParameterError(f"axes: {exc}", field="axes") from None
 
+    def differentiates_force(self) -> bool:
+        """Whether the law turns the force's rate into velocity: a K1 on an axis that yields
+        (the combined and position laws)."""
+        if self.law not in ("combined", "position"):
+            return False
+        selected = np.diag(selection_matrix(self.axes)) > 0.0
+        return bool(np.any(np.array(self.k1)[selected] > 0.0))
+
     def law_for(self) -> AdmittanceLaw:
         """The law with these gains and selection."""
         S = selection_matrix(self.axes)
@@ -280,9 +303,13 @@ class AdmittanceConfig:
     ) -> AdmittanceController:
         """The controller for a loop of period ``period_s`` [s] (the filter's sample time) on a
         sensor sampling at ``sensor_rate_hz`` [Hz] (None: not known): its wrench filter
-        :attr:`filter_hz` or :func:`filter_hz_for` the rate, its stale limit
+        :attr:`filter_hz` or :func:`filter_hz_for` the rate and the law, its stale limit
         :func:`stale_after_s_for` the rate."""
-        cutoff_hz = self.filter_hz if self.filter_hz is not None else filter_hz_for(sensor_rate_hz)
+        cutoff_hz = (
+            self.filter_hz
+            if self.filter_hz is not None
+            else filter_hz_for(sensor_rate_hz, differentiates=self.differentiates_force())
+        )
         stale_s = stale_after_s_for(self.limits.stale_after_s, sensor_rate_hz)
         return AdmittanceController(
             law=self.law_for(),
