@@ -538,8 +538,13 @@ class URRobot(LatenessOfPacer):
             dashboard.disconnect()
 
 
-#: A controller that sends no new data within this many periods is silent (at exit).
-_ALIVE_WAIT_PERIODS: Final = 25
+#: A controller that sends no new data within this many periods is silent (at exit): 0.2 s at
+#: 500 Hz, past the stalls of a loaded host's twin (its stream's gaps reached 70 ms in clean-clone
+#: runs). At 25 periods (50 ms) a clean clone's run took a live twin for silent after a moveL
+#: and took the silent path (a bounded disconnect on a thread), where ur_rtde 1.6's disconnect
+#: crashed the process with a segmentation fault; a healthy controller's interfaces are only
+#: dropped.
+_ALIVE_WAIT_PERIODS: Final = 100
 
 #: How long a stop, the script's end or a disconnect may take before the controller is taken
 #: for silent [s]. A healthy controller answers each within a few periods (speedStop
