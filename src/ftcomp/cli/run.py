@@ -278,12 +278,10 @@ def _run_session(
 ) -> RunResult:
     """Open the hardware, run the loop, close the hardware (the robot stopped); Ctrl-C held
     by ``hold`` once the loop has ended."""
-    from ftcomp.control.filters import load_design_library
     from ftcomp.session.rebias_live import rebias_still
     from ftcomp.session.run import run_compliant
     from ftcomp.views.live import session_observers
 
-    load_design_library()  # the controller's filter is designed after connecting
     with (
         session_observers(
             args.log, args.view, overwrite=args.force, control_frame=args.frame

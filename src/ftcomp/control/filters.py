@@ -1,7 +1,8 @@
 """Low-pass filtering of a wrench stream for control, one sample at a time.
 
-:class:`LowPassFilter` is a Butterworth filter designed with :func:`scipy.signal.butter` as
-second-order sections for a fixed sample period; its ``step`` is pure (state in, state out) and
+:class:`LowPassFilter` is a Butterworth filter as second-order sections for a fixed sample
+period (:func:`butterworth_sections`: the transfer function :func:`scipy.signal.butter` designs,
+written out; the tests hold the two equal); its ``step`` is pure (state in, state out) and
 implements exactly what :func:`scipy.signal.sosfilt` computes (transposed direct form II, the
 state layout of :func:`scipy.signal.sosfilt_zi`), over all channels at once.
 The derivative the combined law needs (dΔF/dt) is then a backward difference of the *filtered*
@@ -11,6 +12,11 @@ One kernel steps the sections (:func:`_sections_step`); its arithmetic is the sa
 array of channels (:meth:`LowPassFilter.step`, the controller's wrench) and on one Python float
 (:meth:`LowPassFilter.step_scalar`, for a scalar signal in a 1 kHz loop such as the placement's
 decision filter: no array is allocated, a few times cheaper than ``step`` on one channel).
+
+The design is written out rather than called from :mod:`scipy.signal`: importing that package
+took 1.8 s of the 3.2 s from ``ftcomp run``'s start to its loop's first cycle on the 2-core
+reference machine (it parses the docstrings of every function it exports), for a dozen lines of
+exact algebra.
 """
 
 from __future__ import annotations
@@ -25,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ftcomp.errors import ParameterError
 
-__all__ = ["LowPassFilter", "load_design_library"]
+__all__ = ["LowPassFilter", "butterworth_sections"]
 
 # One second-order section as floats: (b0, b1, b2, a1, a2); a0 is 1 (butter normalises it).
 _Section = tuple[float, float, float, float, float]
@@ -58,12 +64,53 @@ def _sections_step(
     return new, y
 
 
-def load_design_library() -> None:
-    """Import :mod:`scipy.signal` now: 1-4 s on a 2-core host. A command that designs a
-    filter after connecting to a robot calls this before connecting, so that the time from the
-    connection to the loop's first cycle stays short (the import there once delayed ``run``'s
-    first cycle by 4 s after the controller had started streaming)."""
-    import scipy.signal  # noqa: F401
+def butterworth_sections(order: int, cutoff_hz: float, rate_hz: float) -> NDArray[np.float64]:
+    """A digital Butterworth low-pass as second-order sections, ``(n_sections, 6)`` rows
+    ``(b0, b1, b2, 1, a1, a2)`` in :func:`scipy.signal.butter`'s ``output="sos"`` layout.
+
+    The analog prototype's poles ``exp(i pi (2k + order - 1) / (2 order))``, k = 1..order,
+    scaled to the pre-warped cutoff ``2 rate tan(pi cutoff / rate)`` and mapped by the bilinear
+    transform ``z = (2 rate + s) / (2 rate - s)``; every zero at z = -1. A conjugate pair is one
+    section, the real pole of an odd order a first-order one (b2 = a2 = 0); the sections go
+    from the pole farthest from the unit circle to the nearest (as scipy orders them), each
+    with a gain of 1 at DC, so the cascade's is 1: the Butterworth's. (scipy spreads the gain
+    differently over the sections: the cascade is the same.)
+
+    Args:
+        order: 1..8.
+        cutoff_hz: -3 dB frequency, in (0, rate_hz / 2).
+        rate_hz: sample rate.
+    """
+    warped = 2.0 * rate_hz * np.tan(np.pi * cutoff_hz / rate_hz)
+    # The real pole -warped of an odd order (the farthest from the unit circle of all: the
+    # first section), then the upper half plane's poles, k = order // 2 down to 1 (the others
+    # are their conjugates), the farthest from the unit circle first.
+    k = np.arange(order // 2, 0, -1)
+    analog = [
+        *([-warped] if order % 2 else []),
+        *warped * np.exp(1j * np.pi * (2 * k + order - 1) / (2 * order)),
+    ]
+    rows = []
+    for s in analog:
+        pole = (2.0 * rate_hz + s) / (2.0 * rate_hz - s)
+        # 1 - pole from the analog pole: for a low cutoff the pole is near 1, and the
+        # difference of two numbers close to 1 would lose the section's gain.
+        gap = -2.0 * s / (2.0 * rate_hz - s)
+        if np.isreal(s):  # b = gain * (1, 1): the zero at -1, H(1) = 1
+            gain = float(np.real(gap)) / 2.0
+            rows.append((gain, gain, 0.0, 1.0, -float(np.real(pole)), 0.0))
+        else:  # b = gain * (1, 2, 1): the zeros at -1, H(1) = 1
+            gain = abs(gap) ** 2 / 4.0
+            rows.append((gain, 2.0 * gain, gain, 1.0, -2.0 * pole.real, abs(pole) ** 2))
+    return np.array(rows, dtype=float)
+
+
+def _steady_state(sections: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each section's state after a unit input forever (:func:`scipy.signal.sosfilt_zi`):
+    transposed direct form II at rest, ``y = x = 1`` through sections of unit DC gain."""
+    b1, b2, a1, a2 = sections[:, 1], sections[:, 2], sections[:, 4], sections[:, 5]
+    z1 = b2 - a2
+    return np.stack([b1 - a1 + z1, z1], axis=1)
 
 
 @dataclass(frozen=True)
@@ -102,23 +149,14 @@ class LowPassFilter:
             raise ParameterError(f"order must be an integer in 1..8, got {self.order!r}")
         if not (isinstance(self.channels, int) and self.channels >= 1):
             raise ParameterError(f"channels must be a positive integer, got {self.channels!r}")
-        # scipy.signal is loaded here, when a filter is designed (off the cycle): importing it
-        # takes most of a second, which every command that only builds its options paid.
-        from scipy import signal
-
-        sos = np.asarray(
-            signal.butter(
-                self.order, self.cutoff_hz, btype="low", output="sos", fs=1 / self.period_s
-            ),
-            dtype=float,
-        )
+        sos = butterworth_sections(self.order, self.cutoff_hz, 1.0 / self.period_s)
         sos.setflags(write=False)
         object.__setattr__(self, "sos", sos)
         sections = tuple((b0, b1, b2, a1, a2) for b0, b1, b2, _a0, a1, a2 in sos.tolist())
         object.__setattr__(self, "_sections", sections)
         per_channel = tuple(tuple(np.full(self.channels, c) for c in sec) for sec in sections)
         object.__setattr__(self, "_sections_per_channel", per_channel)
-        zi = np.asarray(signal.sosfilt_zi(sos), dtype=float)
+        zi = _steady_state(sos)
         zi.setflags(write=False)
         object.__setattr__(self, "_zi", zi)
 
