@@ -170,8 +170,12 @@ def test_every_control_call_the_backend_makes_exists_with_that_signature(
         "speedStop",
         "servoStop",
         "stopScript",
-    }  # no disconnect: dropping the interface disconnects it (URRobot.__exit__)
+        "disconnect",
+    }
     assert set(CheckedControl.calls) == expected
+    # Each interface disconnected once, and kept: a destructor would disconnect again with
+    # ur_rtde's 0.5 s sleep (URRobot.__exit__)
+    assert CheckedControl.calls.count("disconnect") == 2
 
 
 def test_an_unreachable_pose_is_refused_before_any_move(
@@ -378,7 +382,7 @@ def controllers() -> Iterator[dict[str, str]]:
         ("ur://{good}:30003", None, "ur:// takes a host only"),
         ("ur://{good}?speed=1", None, "unknown option 'speed' for ur://"),
         ("ur://{good}?max_speed_mm_s=5000", None, "above 1000 mm/s"),
-        ("ur://{good}?max_joint_speed_deg_s=400", None, "max_joint_speed_deg_s above 180"),
+        ("ur://{good}?max_joint_speed_deg_s=400", None, "max_joint_speed_deg_s above 179"),
         ("ur://{good}?max_joint_accel_deg_s2=-1", None, "max_joint_accel_deg_s2"),
         ("ur://", None, "give the controller's address"),
         ("ur://{good}", "ur://{nobody}", "must be on the robot's controller"),

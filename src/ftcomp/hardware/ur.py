@@ -95,10 +95,11 @@ _ARRIVED_RAD = math.radians(0.5)
 #: Joint moves (moveJ) at most this fast and with this acceleration by default, leading joint
 #: [rad/s, rad/s^2]: ur_rtde's and PolyScope's defaults for moveJ (the URI's
 #: ``max_joint_speed_deg_s`` and ``max_joint_accel_deg_s2``, up to the limits below: a UR5e's
-#: joints turn at most 180 deg/s).
+#: joints turn at most 180 deg/s; ur_rtde's moveJ refuses more than 3.14 rad/s, 179.9 deg/s, with
+#: a ValueError).
 _JOINT_SPEED_RAD_S: Final = 1.05
 _JOINT_ACCEL_RAD_S2: Final = 1.4
-_MAX_JOINT_SPEED_DEG_S: Final = 180.0
+_MAX_JOINT_SPEED_DEG_S: Final = 179.0
 _MAX_JOINT_ACCEL_DEG_S2: Final = 1000.0
 
 
@@ -213,31 +214,22 @@ class URRobot(LatenessOfPacer):
         """Stop motion, end the control script, disconnect; with a silent controller (it may
         go silent at any moment) each call is bounded in time (:data:`_EXIT_WAIT_S`).
 
-        A healthy controller's interfaces are disconnected by dropping them: each destructor
-        calls ``disconnect``, which ends in a fixed 0.5 s sleep (ur_rtde 1.6), and it does so
-        after an explicit ``disconnect`` too, so calling that first paid the sleep twice: every
-        command on a UR spent 2 s here instead of 1 (on the twin: the two ``disconnect`` calls
-        0.50 s each, then the two destructors 1.00 s)."""
+        Both interfaces disconnect at once (:func:`_disconnect`): ur_rtde 1.6's ``disconnect``
+        ends in a fixed 0.5 s sleep, and each destructor disconnects again, so one after the
+        other and destroyed, the two cost every command on a UR 1 s here (2 s with explicit
+        disconnects before the destructors)."""
         try:
             self.stop()
         finally:
             if not self._silent and not self._stream_alive():
                 self._silent = True
-            if self.control is not None:
-                control, self.control = self.control, None
-                if self._silent:  # stopScript would wait for the program's end in silent data
-                    _bounded(control.disconnect, "ur-disconnect")
-                    _abandon(control)
-                else:
-                    control.stopScript()
-                    del control  # its destructor disconnects
-            if self.receive is not None:
-                receive, self.receive = self.receive, None
-                if self._silent:
-                    _bounded(receive.disconnect, "ur-disconnect")
-                    _abandon(receive)
-                else:
-                    del receive  # its destructor disconnects
+            control, receive, self.control, self.receive = self.control, self.receive, None, None
+            try:
+                if control is not None and not self._silent:
+                    control.stopScript()  # with silent data it would wait for the program's end
+            finally:
+                interfaces = [i for i in (control, receive) if i is not None]
+                _disconnect(interfaces, silent=self._silent)
 
     def _stream_alive(self) -> bool:
         """Whether the controller's data still come: a new timestamp within a few periods.
@@ -550,6 +542,43 @@ _ALIVE_WAIT_PERIODS: Final = 100
 #: for silent [s]. A healthy controller answers each within a few periods (speedStop
 #: decelerates from 0.25 m/s at 10 m/s^2 in 25 ms).
 _EXIT_WAIT_S: Final = 0.5
+#: How long the interfaces' disconnects may take [s]: ur_rtde 1.6's fixed 0.5 s sleep at the end
+#: of each, and the time of any other call at exit.
+_DISCONNECT_WAIT_S: Final = 0.5 + _EXIT_WAIT_S
+
+
+def _disconnect(interfaces: list[Any], *, silent: bool) -> None:
+    """Disconnect ur_rtde interfaces, all at once, each on a daemon thread (ur_rtde releases
+    the interpreter's lock in its calls), waiting at most :data:`_DISCONNECT_WAIT_S` in all;
+    then keep each one, never destroyed.
+
+    A healthy interface is kept (:data:`_KEPT`) because its destructor would disconnect again
+    and sleep another 0.5 s (ur_rtde 1.6); disconnected, it holds no thread and no socket,
+    a few kilobytes until the process ends. One whose controller went silent (``silent``), or
+    whose ``disconnect`` did not return in time, is abandoned (:func:`_abandon`). What a
+    ``disconnect`` raises is dropped: on the way to a stop the next resort follows (the
+    dashboard's stop), not an error."""
+    returned = [threading.Event() for _ in interfaces]
+
+    def run(interface: Any, done: threading.Event) -> None:
+        with contextlib.suppress(Exception):
+            interface.disconnect()
+            done.set()
+
+    workers = [
+        threading.Thread(target=run, args=(i, done), name="ur-disconnect", daemon=True)
+        for i, done in zip(interfaces, returned, strict=True)
+    ]
+    deadline = time.monotonic() + _DISCONNECT_WAIT_S
+    for worker in workers:
+        worker.start()
+    for worker in workers:
+        worker.join(max(0.0, deadline - time.monotonic()))
+    for interface, done in zip(interfaces, returned, strict=True):
+        if silent or not done.is_set():
+            _abandon(interface)
+        else:
+            _keep(interface)
 
 
 def _bounded(call: Callable[[], object], name: str) -> bool:
@@ -570,8 +599,19 @@ def _bounded(call: Callable[[], object], name: str) -> bool:
     return returned.is_set()
 
 
+#: Disconnected ur_rtde interfaces of healthy controllers, kept until the process ends (see
+#: _disconnect).
+_KEPT: list[object] = []
 #: ur_rtde interfaces whose controller went silent, kept until the process ends (see _abandon).
 _ABANDONED: list[object] = []
+
+
+def _keep(interface: object) -> None:
+    """Never destroy a disconnected interface of a healthy controller: its destructor would
+    only disconnect again, with ur_rtde's 0.5 s sleep (a reference the interpreter never
+    drops, as :func:`_abandon`'s; the process may end normally)."""
+    _KEPT.append(interface)
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(interface))
 
 
 def _abandon(interface: object) -> None:
@@ -584,9 +624,9 @@ def _abandon(interface: object) -> None:
     stopped on the fault and written its log (ur_rtde 1.6.5; issue 34: 2 of 3 rtde-stop tries
     on a busy host). Skipping the ``disconnect`` as well is worse (every try aborted at exit:
     the library's threads must be told to stop). So ``disconnect`` is asked on a worker
-    (:func:`_bounded`) and the interface is kept, with a reference the interpreter never drops
-    (not even when it clears modules at exit); the operating system reclaims the rest with
-    the process."""
+    (:func:`_disconnect`) and the interface is kept, with a reference the interpreter never
+    drops (not even when it clears modules at exit); the operating system reclaims the rest
+    with the process."""
     _ABANDONED.append(interface)
     ctypes.pythonapi.Py_IncRef(ctypes.py_object(interface))
 
@@ -667,8 +707,10 @@ def set_payload(
             if not control.setPayload(float(mass_kg), cog_flange.tolist()):
                 raise HardwareError(f"{name}: the controller refused setPayload")
         finally:
-            control.stopScript()
-            del control  # its destructor disconnects (URRobot.__exit__)
+            try:
+                control.stopScript()
+            finally:
+                _disconnect([control], silent=False)
         deadline = time.monotonic() + 1.0  # the next packages carry it
         while True:
             after = Payload(
@@ -682,7 +724,7 @@ def set_payload(
                 break
             time.sleep(0.01)
     finally:
-        del receive  # its destructor disconnects (URRobot.__exit__)
+        _disconnect([receive], silent=False)
     return before, after
 
 
