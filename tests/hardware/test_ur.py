@@ -429,8 +429,8 @@ def _tcp_connections_to(host: str) -> int:
 def test_leaving_the_robot_closes_every_connection_to_the_controller(
     request: pytest.FixtureRequest,
 ) -> None:
-    """The interfaces are disconnected by their destructors (no explicit ``disconnect``, which
-    paid ur_rtde's 0.5 s sleep twice): nothing may keep one alive past the block."""
+    """The interfaces disconnect at once and are kept, not destroyed (a destructor disconnects
+    again, with ur_rtde's 0.5 s sleep): no connection of theirs may outlive the block."""
     pytest.importorskip("mujoco")
     from standins.twin_process import running_twin
 
