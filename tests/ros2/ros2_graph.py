@@ -8,7 +8,7 @@ checks that no non-loopback interface sent a packet during the test (the kernel'
 ``/proc/net/dev`` before and after). Without the profile, Fast DDS's discovery announces itself
 by multicast on every interface and the check fails (tried: eth0 sent 9 packets in 1.3 s).
 Unrelated traffic of the same machine in the same seconds would fail it too; the message says
-which interface moved.
+which interface moved. Under ``-n 2`` no headless browser runs beside it (tests/offhost.py).
 """
 
 from __future__ import annotations
@@ -21,6 +21,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+
+from offhost import off_host_turn
 
 HERE = Path(__file__).parent
 _tests = itertools.count()
@@ -38,9 +40,10 @@ def ros2_graph_fixture(
         monkeypatch.setenv(key, value)
     domain = 10 + (os.getpid() * 7 + next(_tests)) % 200
     monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))
-    before = transmitted_packets()
-    yield domain
-    after = transmitted_packets()
+    with off_host_turn():  # no browser beside it under -n 2 (tests/offhost.py)
+        before = transmitted_packets()
+        yield domain
+        after = transmitted_packets()
     moved = {k: after[k] - before.get(k, 0) for k in after if after[k] != before.get(k, 0)}
     assert not moved, f"packets sent on non-loopback interfaces during the test: {moved}"
 

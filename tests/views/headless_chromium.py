@@ -21,6 +21,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from offhost import off_host_turn
+
 __all__ = ["MEASURE_JS", "chromium_binary", "measure_page"]
 
 #: In the page: the viewport width, every image and whether it loaded, every element that
@@ -145,6 +147,13 @@ def measure_page(
     binary = binary or chromium_binary()
     if binary is None:
         raise FileNotFoundError("chromium is not installed")
+    with off_host_turn():  # never beside a ROS 2 test's packet count (tests/offhost.py)
+        return _measure_page(binary, path, widths, timeout_s)
+
+
+def _measure_page(
+    binary: str, path: Path, widths: Sequence[int], timeout_s: float
+) -> dict[int, dict[str, Any]]:
     to_browser_r, to_browser_w = os.pipe()
     from_browser_r, from_browser_w = os.pipe()
     profile = tempfile.mkdtemp(prefix="ftcomp-chromium-")
