@@ -104,7 +104,11 @@ def serve_configuration(http: socket.socket, page: bytes) -> ThreadingHTTPServer
     server.socket.close()
     server.socket = http
     http.listen(8)
-    threading.Thread(target=server.serve_forever, daemon=True).start()
+    # serve_forever looks for a shutdown every poll_interval: at its default, 0.5 s, closing the
+    # Net F/T took half a second of every twin's stop (about 35 s of a test run's 97 twins).
+    threading.Thread(
+        target=server.serve_forever, kwargs={"poll_interval": _HTTP_POLL_S}, daemon=True
+    ).start()
     return server
 
 
@@ -264,6 +268,9 @@ class NetFtServer:
         self.http.server_close()
         self.sock.close()
 
+
+#: How often the Net F/T's HTTP server looks for a shutdown [s].
+_HTTP_POLL_S: Final = 0.02
 
 #: The SCHED_FIFO priority the twin's cell loop asks for; its Net F/T sender asks for one more.
 #: Both stay below a live loop's (:data:`ftcomp.hardware.pacing.LOOP_PRIORITY`, 5) and above
