@@ -552,40 +552,25 @@ def _disconnect(interfaces: list[Any], *, silent: bool) -> None:
     the interpreter's lock in its calls), waiting at most :data:`_DISCONNECT_WAIT_S` in all;
     then keep each one, never destroyed.
 
-    A healthy interface is kept (:data:`_KEPT`) because its destructor would disconnect again
+    A healthy interface is kept (:func:`_keep`) because its destructor would disconnect again
     and sleep another 0.5 s (ur_rtde 1.6); disconnected, it holds no thread and no socket,
     a few kilobytes until the process ends. One whose controller went silent (``silent``), or
-    whose ``disconnect`` did not return in time, is abandoned (:func:`_abandon`). What a
-    ``disconnect`` raises is dropped: on the way to a stop the next resort follows (the
-    dashboard's stop), not an error."""
-    returned = [threading.Event() for _ in interfaces]
-
-    def run(interface: Any, done: threading.Event) -> None:
-        with contextlib.suppress(Exception):
-            interface.disconnect()
-            done.set()
-
-    workers = [
-        threading.Thread(target=run, args=(i, done), name="ur-disconnect", daemon=True)
-        for i, done in zip(interfaces, returned, strict=True)
-    ]
+    whose ``disconnect`` did not return in time or raised, is abandoned (:func:`_abandon`)."""
+    started = [_on_thread(i.disconnect, "ur-disconnect") for i in interfaces]
     deadline = time.monotonic() + _DISCONNECT_WAIT_S
-    for worker in workers:
-        worker.start()
-    for worker in workers:
+    for worker, _ in started:
         worker.join(max(0.0, deadline - time.monotonic()))
-    for interface, done in zip(interfaces, returned, strict=True):
-        if silent or not done.is_set():
+    for interface, (_, returned) in zip(interfaces, started, strict=True):
+        if silent or not returned.is_set():
             _abandon(interface)
         else:
             _keep(interface)
 
 
-def _bounded(call: Callable[[], object], name: str) -> bool:
-    """Run ``call`` on a daemon thread and wait for it at most :data:`_EXIT_WAIT_S` (ur_rtde
-    releases the interpreter's lock in its calls, so a call that hangs holds only its own
-    thread). Whether it returned in time without raising: what it raises is dropped, since
-    on the way to a stop the next resort follows (the dashboard's stop), not an error."""
+def _on_thread(call: Callable[[], object], name: str) -> tuple[threading.Thread, threading.Event]:
+    """``call`` started on a daemon thread, and the event it sets once it returned without
+    raising (what it raises is dropped: on the way to a stop the next resort follows, the
+    dashboard's stop, not an error)."""
     returned = threading.Event()
 
     def run() -> None:
@@ -595,13 +580,18 @@ def _bounded(call: Callable[[], object], name: str) -> bool:
 
     worker = threading.Thread(target=run, name=name, daemon=True)
     worker.start()
+    return worker, returned
+
+
+def _bounded(call: Callable[[], object], name: str) -> bool:
+    """Run ``call`` on a daemon thread and wait for it at most :data:`_EXIT_WAIT_S` (ur_rtde
+    releases the interpreter's lock in its calls, so a call that hangs holds only its own
+    thread). Whether it returned in time without raising (:func:`_on_thread`)."""
+    worker, returned = _on_thread(call, name)
     worker.join(_EXIT_WAIT_S)
     return returned.is_set()
 
 
-#: Disconnected ur_rtde interfaces of healthy controllers, kept until the process ends (see
-#: _disconnect).
-_KEPT: list[object] = []
 #: ur_rtde interfaces whose controller went silent, kept until the process ends (see _abandon).
 _ABANDONED: list[object] = []
 
@@ -609,8 +599,7 @@ _ABANDONED: list[object] = []
 def _keep(interface: object) -> None:
     """Never destroy a disconnected interface of a healthy controller: its destructor would
     only disconnect again, with ur_rtde's 0.5 s sleep (a reference the interpreter never
-    drops, as :func:`_abandon`'s; the process may end normally)."""
-    _KEPT.append(interface)
+    drops, not even when it clears modules at exit; the process may end normally)."""
     ctypes.pythonapi.Py_IncRef(ctypes.py_object(interface))
 
 
@@ -624,11 +613,11 @@ def _abandon(interface: object) -> None:
     stopped on the fault and written its log (ur_rtde 1.6.5; issue 34: 2 of 3 rtde-stop tries
     on a busy host). Skipping the ``disconnect`` as well is worse (every try aborted at exit:
     the library's threads must be told to stop). So ``disconnect`` is asked on a worker
-    (:func:`_disconnect`) and the interface is kept, with a reference the interpreter never
-    drops (not even when it clears modules at exit); the operating system reclaims the rest
-    with the process."""
+    (:func:`_disconnect`) and the interface is kept (:func:`_keep`), and noted so that a
+    command line program ends without the teardown (:func:`exit_process_if_abandoned`); the
+    operating system reclaims the rest with the process."""
     _ABANDONED.append(interface)
-    ctypes.pythonapi.Py_IncRef(ctypes.py_object(interface))
+    _keep(interface)
 
 
 def exit_process_if_abandoned(code: int) -> None:
