@@ -5,8 +5,8 @@ The module (``toy_devices.py`` beside this file, copied to a temporary folder un
 name so that nothing imports it by accident) declares a toy arm and a toy F/T sensor, each a
 live backend and a twin face. The conformance suite pairs each with the first face of the
 other kind; asked for the grid of every pair (``FTCOMP_CONFORMANCE_PAIRS=grid``), it is run on
-the toy pair as on any other: record at designed poses, calibrate, stream, place a load, the
-faces' faults.
+the toy pair: record at designed poses, calibrate, stream, the faces' faults (its placements
+are left to the real pairs: the same ``run`` through the same faces as the faults).
 """
 
 from __future__ import annotations
@@ -103,10 +103,12 @@ def test_the_conformance_suite_runs_every_pair_and_the_toy_pair_passes(
     run = subprocess.run(
         # in one process (-n 0): this test's worker is the live tests' one (conftest.py)
         [sys.executable, "-m", "pytest", SUITE, "-q", "-p", "no:cacheprovider", "-n", "0", "-k",
-         "toybot-toyft or ur5e-toyft-toyft-silent or toybot-netft-toybot-silent"],
+         "(toybot-toyft and not sponge) or ur5e-toyft-toyft-silent or toybot-netft-toybot-silent"],
         capture_output=True, text=True, env=env, timeout=600, check=False, cwd=HERE.parent.parent,
     )  # fmt: skip
     assert run.returncode == 0, run.stdout[-6000:] + run.stderr[-2000:]
-    # record and calibrate, stream, the sponge placement (the book's is the first sensor
-    # face's), the two faces' faults (each with its partner above)
-    assert re.search(r"\b5 passed, 1 skipped\b", run.stdout), run.stdout[-2000:]
+    # record and calibrate, stream, the two faces' faults (each with its partner above); not
+    # the placements, which ``run`` carries through the same faces as the faults (the sponge's
+    # is every real pair's, the book's the first sensor face's), so the toy pair adds nothing
+    # there but 8 s of the suite's critical path
+    assert re.search(r"\b4 passed, 1 skipped\b", run.stdout), run.stdout[-2000:]

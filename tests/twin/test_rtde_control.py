@@ -121,6 +121,9 @@ def test_the_twin_answers_reachability_and_safety_limits(clients) -> None:
     assert receive.getSafetyMode() == 1
 
 
+#: Untimed: judged by where the moves end and what ur:// says (9 s of moves, beside the other
+#: tests under -n 2).
+@pytest.mark.untimed
 def test_a_moveL_that_a_joint_limit_holds_ends_the_program_as_a_ur_controller_does() -> None:
     """Turning the tool 170 deg about its axis three times winds wrist 3 past its 360 deg: the
     third moveL stops there, the program ends (ur_rtde's moveL returns False), and ur://
