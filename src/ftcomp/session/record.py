@@ -37,7 +37,7 @@ from ftcomp.config_fields import check_fields, param
 from ftcomp.control.loop import ControlCycle, loop_clock, run_loop
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import OrientationEncoding, quat_from_matrix
-from ftcomp.hardware.pacing import LoopClock, TimingSummary
+from ftcomp.hardware.pacing import LoopClock, TimingSummary, realtime_loop
 from ftcomp.hardware.protocols import Mount, ReportsExtraChannels, Robot, WrenchSensor
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.samples_csv import write_samples
@@ -395,20 +395,27 @@ def _run_plan(
     reason = ""
     try:
         if isinstance(plan, RobotDriven):
-            record_poses(
-                robot,
-                sensor,
-                plan.poses,
-                plan.samples_per_pose,
-                driven,
-                mount=mount,
-                position_base_m=plan.position_base_m,
-                move_duration_s=plan.move_duration_s,
-                settle_max_s=plan.settle_max_s,
-                tolerance=plan.tolerance,
-                max_tries=plan.max_tries,
-                on_skip=on_skip,
-            )
+            # No periodic loop, but the sensor's readers keep the device's pace: real-time
+            # scheduling as a live loop's (realtime_loop), or a busy machine holds them off
+            # until a serial sensor's bytes overflow its port's buffer (4 KB, 0.1 s of a Bota
+            # Gen0 stream: a cut frame, a CRC fault) or a Net F/T is silent past its limit;
+            # with two busy processes at nice 19 beside it, a Bota and an FT 300 RTU
+            # recording broke in every try, with this in none.
+            with realtime_loop():
+                record_poses(
+                    robot,
+                    sensor,
+                    plan.poses,
+                    plan.samples_per_pose,
+                    driven,
+                    mount=mount,
+                    position_base_m=plan.position_base_m,
+                    move_duration_s=plan.move_duration_s,
+                    settle_max_s=plan.settle_max_s,
+                    tolerance=plan.tolerance,
+                    max_tries=plan.max_tries,
+                    on_skip=on_skip,
+                )
         else:
             recorder = ManualRecorder(
                 plan.n_poses,
