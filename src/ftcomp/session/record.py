@@ -37,7 +37,7 @@ from ftcomp.config_fields import check_fields, param
 from ftcomp.control.loop import ControlCycle, loop_clock, run_loop
 from ftcomp.errors import FtcompError, ParameterError
 from ftcomp.frames import OrientationEncoding, quat_from_matrix
-from ftcomp.hardware.pacing import LoopClock, TimingSummary, realtime_loop
+from ftcomp.hardware.pacing import WORKER_PRIORITY, LoopClock, TimingSummary, realtime_loop
 from ftcomp.hardware.protocols import Mount, ReportsExtraChannels, Robot, WrenchSensor
 from ftcomp.io.atomic import check_writable
 from ftcomp.io.samples_csv import write_samples
@@ -400,8 +400,13 @@ def _run_plan(
             # until a serial sensor's bytes overflow its port's buffer (4 KB, 0.1 s of a Bota
             # Gen0 stream: a cut frame, a CRC fault) or a Net F/T is silent past its limit;
             # with two busy processes at nice 19 beside it, a Bota and an FT 300 RTU
-            # recording broke in every try, with this in none.
-            with realtime_loop():
+            # recording broke in every try. Raising the readers alone was not enough (the
+            # thread that holds the interpreter's lock must run too), and this thread waits in
+            # a client library's blocking calls, so it runs at the workers' priority, not a
+            # loop's: below the twin's threads, which answer those calls (at the loop's
+            # priority, a UR twin's inverse kinematics once came too late beside another
+            # worker's tests: a designed pose taken for unreachable).
+            with realtime_loop(WORKER_PRIORITY):
                 record_poses(
                     robot,
                     sensor,
