@@ -64,6 +64,8 @@ _STOP, _START, _BUFFERED, _BIAS = 0x0000, 0x0002, 0x0003, 0x0042
 _DELAY_S: Final = 0.003
 #: A sample later than this past its time is dropped, not sent [s].
 _MAX_LATE_S: Final = 0.010
+#: How often the Net F/T's HTTP server looks for a shutdown [s].
+_HTTP_POLL_S: Final = 0.02
 
 
 def configuration_page(
@@ -268,9 +270,6 @@ class NetFtServer:
         self.http.server_close()
         self.sock.close()
 
-
-#: How often the Net F/T's HTTP server looks for a shutdown [s].
-_HTTP_POLL_S: Final = 0.02
 
 #: The SCHED_FIFO priority the twin's cell loop asks for; its Net F/T sender asks for one more.
 #: Both stay below a live loop's (:data:`ftcomp.hardware.pacing.LOOP_PRIORITY`, 5) and above
