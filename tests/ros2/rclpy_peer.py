@@ -8,7 +8,8 @@
 :data:`URDF`); with ``--description``, also ``/robot_description`` latched (transient local),
 as robot_state_publisher does; with ``--still``, the tool at rest with the bias moved by
 :data:`SHIFT` instead of a contact; with ``--nan``, every odd reading's fz is NaN; with
-``--joints-s=S``, the joint states stop after S seconds (the wrenches go on); with
+``--joints-s=S``, the joint states stop S seconds after a subscriber first matched them (the
+wrenches go on; counted from the start, a node discovered late under load never saw one); with
 ``--load=KG``, the tool at rest (no contact) and, from the first reading after the file PATH
 exists, a grasped load of KG at :data:`LOAD_COG_M` (:func:`load_wrench`).
 
@@ -148,6 +149,7 @@ def publish(
     held = False
     end = time.monotonic() + seconds
     k = 0
+    joints_until: float | None = None  # set once a subscriber matched /joint_states
     while time.monotonic() < end:
         msg = WrenchStamped()
         _stamp(msg.header.stamp, EPOCH_NS + k * PERIOD_NS)
@@ -162,7 +164,9 @@ def publish(
         f, m = msg.wrench.force, msg.wrench.torque
         f.x, f.y, f.z, m.x, m.y, m.z = w
         wrenches.publish(msg)
-        if k % 2 == 0 and k * PERIOD_NS < joints_s * 1e9:
+        if joints_until is None and joints.get_subscription_count() > 0:
+            joints_until = time.monotonic() + joints_s
+        if k % 2 == 0 and (joints_until is None or time.monotonic() < joints_until):
             js = JointState(name=["yaw", "pitch"], position=list(Q))
             _stamp(js.header.stamp, time.time_ns())
             joints.publish(js)

@@ -319,7 +319,8 @@ class NetFTSensor:
     @property
     def sample_rate_hz(self) -> float:
         """The mean rate of the records taken from the client since the first [Hz] (those
-        :meth:`read_new` handed out or keeps; :meth:`read` takes none); NaN before ten
+        :meth:`read_new` handed out or keeps; :meth:`read` takes none); NaN until
+        :func:`~ftcomp.hardware.arrival_stream.mean_rate_hz` can tell
         (:class:`~ftcomp.hardware.protocols.ReportsRate`)."""
         if self._first_ns is None or self._newest is None:
             return math.nan
